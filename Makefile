@@ -1,0 +1,40 @@
+# clik: the two commands of the README, and a few more.
+#   make demo   creates .venv, installs clik, runs the case study (out/demo)
+#   make test   creates .venv with the test extras, runs every test and notebook
+
+PYTHON ?= python3
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+PIP    := $(PY) -m pip --disable-pip-version-check
+NOTEBOOKS := $(wildcard notebooks/*.ipynb)
+
+.PHONY: demo test lint bench clean
+
+$(PY):
+	$(PYTHON) -m venv $(VENV)
+	$(PIP) install --quiet --upgrade pip
+
+$(VENV)/.installed: $(PY) pyproject.toml
+	$(PIP) install --quiet -e .
+	touch $@
+
+$(VENV)/.installed-test: $(PY) pyproject.toml
+	$(PIP) install --quiet -e ".[test,notebooks]"
+	touch $@ $(VENV)/.installed
+
+demo: $(VENV)/.installed
+	$(VENV)/bin/clik demo --out out/demo --force
+
+test: $(VENV)/.installed-test
+	$(PY) -m pytest tests $(if $(NOTEBOOKS),--nbmake --nbmake-timeout=300 $(NOTEBOOKS)) -q
+
+lint: $(VENV)/.installed-test
+	$(PIP) install --quiet ruff
+	$(VENV)/bin/ruff check clik tests
+
+bench: $(VENV)/.installed
+	$(PIP) install --quiet -e ".[bench]"
+	$(VENV)/bin/clik bench --out out/bench
+
+clean:
+	rm -rf out .pytest_cache

@@ -1,0 +1,34 @@
+"""Constraints as extra task rows (METHOD.md, "Constraints enlarge the task").
+
+Each constraint contributes, while active, one row to the extended task of
+eqs. (20)-(25): an error ``e_c`` (positive when its threshold is violated), a
+Jacobian row ``j_c`` and a feed-forward term ``f_c`` such that
+``edot_c = f_c - j_c qdot``. The law then runs on ``J_e = (J; j_c ...)`` and
+``e_e = (e; e_c ...)``.
+
+- :class:`Obstacle`: convex obstacles (sphere, box, capsule, cylinder, mesh hull).
+- :class:`JointLimits`: joint-range rows, eqs. (16)-(19).
+- :func:`obstacle_row`: obstacle rows, eqs. (13)-(15), in the paper's squared form
+  or the normalised one.
+- :class:`CollisionScene`: link geometry (convex) and obstacles, with pruning.
+- :class:`ConstraintSet`: activation, release, the ``n - m`` bound (22), events.
+"""
+
+from clik.constraints.collision_scene import CollisionScene, NoCollisionGeometryWarning
+from clik.constraints.constraint_set import RELEASE_RULES, ConstraintSet
+from clik.constraints.joint_limits import JointLimits
+from clik.constraints.obstacle import SHAPES, Obstacle
+from clik.constraints.obstacle_rows import FORMS, obstacle_row, point_jacobian
+
+__all__ = [
+    "FORMS",
+    "RELEASE_RULES",
+    "SHAPES",
+    "CollisionScene",
+    "ConstraintSet",
+    "JointLimits",
+    "NoCollisionGeometryWarning",
+    "Obstacle",
+    "obstacle_row",
+    "point_jacobian",
+]

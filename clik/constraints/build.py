@@ -1,0 +1,70 @@
+"""Build a :class:`ConstraintSet` from a scenario's ``[[obstacles]]`` and ``[constraints]``."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from clik.constraints.constraint_set import ConstraintSet
+from clik.constraints.joint_limits import JointLimits
+from clik.constraints.obstacle import Obstacle
+from clik.errors import ClikError, GeometryError, InputError, JointNotFound, ScenarioError
+
+if TYPE_CHECKING:
+    from clik.robot import Robot
+    from clik.scenario import Scenario
+    from clik.task import Task
+
+
+def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> ConstraintSet:
+    """The scenario's obstacles (always monitored) and enabled constraint rows."""
+    obstacles = []
+    for i, spec in enumerate(scenario.obstacles):
+        kwargs = {k: spec[k] for k in ("radius", "size", "length", "file", "scale") if k in spec}
+        try:
+            obstacles.append(
+                Obstacle(
+                    spec["name"],
+                    spec["shape"],
+                    spec["position"],
+                    spec["rpy"],
+                    spec["velocity"],
+                    spec["threshold"],
+                    **kwargs,
+                )
+            )
+        except (InputError, GeometryError) as exc:
+            raise ScenarioError(scenario.file, f"obstacles[{i}]", str(exc)) from None
+    c = scenario.constraints
+    obs, jl_spec, sc = c["obstacles"], c["joint_limits"], c["self_collision"]
+    joint_limits = None
+    if jl_spec["enabled"] or jl_spec["override"]:  # a bad override is an error even when off
+        try:
+            joint_limits = JointLimits(robot, jl_spec["threshold"], jl_spec["override"])
+        except JointNotFound as exc:
+            raise ScenarioError(
+                scenario.file, "constraints.joint_limits.override", str(exc)
+            ) from None
+        except InputError as exc:
+            raise ScenarioError(scenario.file, exc.field, str(exc)) from None
+        if not jl_spec["enabled"]:
+            joint_limits = None
+    release = obs["release"] or c["release"]
+    try:
+        return ConstraintSet(
+            robot,
+            obstacles=obstacles,
+            obstacle_rows=obs["enabled"],
+            obstacle_threshold=obs["threshold"],
+            obstacle_gain=obs["gain"],
+            form=obs["form"],
+            links=obs["links"],
+            joint_limits=joint_limits,
+            joint_gain=jl_spec["gain"],
+            self_collision=sc["enabled"],
+            self_threshold=sc["threshold"],
+            self_gain=sc["gain"],
+            release=release,
+            hysteresis=c["hysteresis"],
+        )
+    except ClikError as exc:
+        raise ScenarioError(scenario.file, "constraints", str(exc)) from None

@@ -1,0 +1,208 @@
+"""The robot's link geometry and the obstacles, in one Pinocchio GeometryModel.
+
+Built once per robot and obstacle set (nothing is rebuilt per step):
+
+- every collision geometry of the robot becomes a convex shape (meshes are
+  replaced by their convex hulls, NOTES.md: 20-30x faster than BVH for the
+  same distance), attached to its joint;
+- obstacles are geometries attached to the world;
+- every (link, obstacle) pair, and optionally (link, link) self-collision
+  pairs, is a Pinocchio collision pair.
+
+Per step, :meth:`CollisionScene.update` places every geometry (one C++ call)
+and prunes pairs with bounding spheres about each joint's origin, so coal is
+asked only for pairs that may be within the monitoring margin.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from clik.constraints.obstacle import Obstacle, convex_hull
+from clik.errors import GeometryError, InputError
+
+
+class NoCollisionGeometryWarning(UserWarning):
+    """Some links have no collision geometry: they cannot be kept away from obstacles."""
+
+
+class CollisionScene:
+    """Link geometry and obstacles with their collision pairs.
+
+    Args:
+        robot: The robot (its collision model gives the link geometry).
+        obstacles: The obstacles.
+        links: Optional subset of link (frame) names to check; default all links with
+            collision geometry.
+        self_collision: Also create link-link pairs (adjacent links and pairs closer
+            than ``self_margin`` at the reference configuration are excluded).
+
+    Attributes:
+        gmodel, gdata: Pinocchio geometry model and data (links first, then obstacles).
+        link_names: Link (frame) name of each link geometry.
+        link_joint: Parent joint index of each link geometry.
+        obstacle_pairs: Pair index of (link geometry i, obstacle o), array (n_links, n_obs).
+        self_pairs: List of (pair index, link geometry a, link geometry b).
+    """
+
+    def __init__(
+        self,
+        robot: object,
+        obstacles: Sequence[Obstacle] = (),
+        links: Sequence[str] | None = None,
+        self_collision: bool = False,
+        self_margin: float = 0.0,
+    ) -> None:
+        model = robot.model  # type: ignore[attr-defined]
+        source = robot.collision_model  # type: ignore[attr-defined]
+        self.robot = robot
+        self.model = model
+        gmodel = pin.GeometryModel()
+        frame_names = [f.name for f in model.frames]
+        known = sorted({frame_names[g.parentFrame] for g in source.geometryObjects})
+        if links is not None:
+            bad = [name for name in links if name not in known]
+            if bad:
+                raise InputError(
+                    "constraints.obstacles.links",
+                    f"link names with collision geometry among {known}",
+                    bad,
+                )
+        self.link_names: list[str] = []
+        link_joint = []
+        local_radius = []
+        for go in source.geometryObjects:
+            link = frame_names[go.parentFrame]
+            if links is not None and link not in links:
+                continue
+            geometry, radius = _convex(go, f"collision geometry {go.name!r}")
+            obj = pin.GeometryObject(
+                go.name, go.parentJoint, go.parentFrame, go.placement, geometry
+            )
+            gmodel.addGeometryObject(obj)
+            self.link_names.append(link)
+            link_joint.append(go.parentJoint)
+            local_radius.append(float(np.linalg.norm(go.placement.translation)) + radius)
+        visual = robot.visual_model  # type: ignore[attr-defined]
+        drawn = {frame_names[g.parentFrame] for g in visual.geometryObjects if g.parentJoint > 0}
+        missing = sorted(drawn - set(known))
+        self.links_without_geometry = missing
+        if missing:
+            warnings.warn(
+                "links with visual but no collision geometry (not checked against obstacles): "
+                + ", ".join(missing),
+                NoCollisionGeometryWarning,
+                stacklevel=3,
+            )
+        self.n_links = len(self.link_names)
+        self.link_joint = np.asarray(link_joint, dtype=np.intp)
+        # One bounding sphere per joint, about the joint origin, enclosing its geometries.
+        self.joints = [int(j) for j in np.unique(self.link_joint)]
+        self.joint_radius = np.array(
+            [
+                max(r for r, j in zip(local_radius, link_joint, strict=True) if j == jj)
+                for jj in self.joints
+            ]
+        )
+        self._joint_slot = {int(j): i for i, j in enumerate(self.joints)}
+        self.link_slot = np.array(
+            [self._joint_slot[int(j)] for j in self.link_joint], dtype=np.intp
+        )
+
+        self.obstacles = list(obstacles)
+        self.obstacle_geom = []
+        for ob in self.obstacles:
+            obj = pin.GeometryObject(f"obstacle:{ob.name}", 0, 0, ob.placement(0.0), ob.geometry)
+            self.obstacle_geom.append(gmodel.addGeometryObject(obj))
+        self.obstacle_radius = np.array([ob.bounding_radius for ob in self.obstacles])
+        self.obstacle_pairs = np.zeros((self.n_links, len(self.obstacles)), dtype=np.intp)
+        for i in range(self.n_links):
+            for o, g in enumerate(self.obstacle_geom):
+                self.obstacle_pairs[i, o] = len(gmodel.collisionPairs)
+                gmodel.addCollisionPair(pin.CollisionPair(i, g))
+        self.self_pairs: list[tuple[int, int, int]] = []
+        if self_collision:
+            self._add_self_pairs(gmodel, robot, self_margin)
+        self.gmodel = gmodel
+        self.gdata = pin.GeometryData(gmodel)
+        self._joint_pos = np.zeros((len(self.joints), 3))
+
+    def _add_self_pairs(self, gmodel: pin.GeometryModel, robot: object, margin: float) -> None:
+        """Link-link pairs, excluding adjacent links and pairs in contact at the reference."""
+        model = self.model
+        parents = model.parents
+        data = model.createData()
+        gdata = pin.GeometryData(gmodel)
+        pin.framesForwardKinematics(model, data, robot.q_reference)  # type: ignore[attr-defined]
+        pin.updateGeometryPlacements(model, data, gmodel, gdata)
+        for a in range(self.n_links):
+            for b in range(a + 1, self.n_links):
+                ja, jb = int(self.link_joint[a]), int(self.link_joint[b])
+                if ja == jb or parents[ja] == jb or parents[jb] == ja or parents[ja] == parents[jb]:
+                    continue  # same body, adjacent or sibling links (as an SRDF would disable)
+                req, res = coal.DistanceRequest(), coal.DistanceResult()
+                dist = coal.distance(
+                    gmodel.geometryObjects[a].geometry,
+                    _tf(gdata.oMg[a]),
+                    gmodel.geometryObjects[b].geometry,
+                    _tf(gdata.oMg[b]),
+                    req,
+                    res,
+                )
+                if dist <= margin:
+                    continue
+                self.self_pairs.append((len(gmodel.collisionPairs), a, b))
+                gmodel.addCollisionPair(pin.CollisionPair(a, b))
+
+    # -- per step ----------------------------------------------------------------------
+
+    def update(self, data: pin.Data, t: float) -> None:
+        """Place every geometry at the current kinematics (``data.oMi``) and time ``t`` [s]."""
+        for ob, g in zip(self.obstacles, self.obstacle_geom, strict=True):
+            if ob.moving:
+                self.gmodel.geometryObjects[g].placement = ob.placement(t)
+        pin.updateGeometryPlacements(self.model, data, self.gmodel, self.gdata)
+        pos = self._joint_pos
+        oMi = data.oMi
+        for s, j in enumerate(self.joints):
+            pos[s] = oMi[j].translation
+
+    def obstacle_lower_bounds(self, centers: np.ndarray) -> np.ndarray:
+        """Bounding-sphere lower bounds of the joint-obstacle distances (n_joints, n_obs) [m]."""
+        diff = self._joint_pos[:, None, :] - centers[None, :, :]
+        gap = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
+        gap -= self.joint_radius[:, None]
+        gap -= self.obstacle_radius[None, :]
+        return gap
+
+    def distance(self, pair: int) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+        """Signed distance of a pair, its witness points (first on the link) and the normal."""
+        res = pin.computeDistance(self.gmodel, self.gdata, pair)
+        return res.min_distance, res.getNearestPoint1(), res.getNearestPoint2(), res.normal
+
+
+def _tf(M: pin.SE3) -> coal.Transform3s:
+    return coal.Transform3s(M.rotation, M.translation)
+
+
+def _convex(go: pin.GeometryObject, field: str) -> tuple[coal.CollisionGeometry, float]:
+    """A convex version of a link geometry and its bounding radius about its own origin."""
+    geom = go.geometry
+    if isinstance(geom, coal.BVHModelBase):
+        return convex_hull(geom, field)
+    if isinstance(geom, coal.ConvexBase):
+        return geom, float(np.max(np.linalg.norm(np.asarray(geom.points()), axis=1)))
+    if isinstance(geom, coal.Sphere):
+        return geom, geom.radius
+    if isinstance(geom, coal.Box):
+        return geom, float(np.linalg.norm(geom.halfSide))
+    if isinstance(geom, coal.Capsule):
+        return geom, geom.halfLength + geom.radius
+    if isinstance(geom, coal.Cylinder):
+        return geom, float(np.hypot(geom.halfLength, geom.radius))
+    raise GeometryError(f"{field}: unsupported geometry type {type(geom).__name__}")

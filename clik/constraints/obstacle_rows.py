@@ -1,0 +1,73 @@
+r"""Obstacle rows, eqs. (13)-(15) of METHOD.md, from coal's witness points.
+
+With ``p_o`` the witness point on the link, ``c`` the one on the obstacle,
+``d = p_o - c`` and threshold ``d_o``:
+
+- ``"squared"`` (the paper's form): ``e_o = 1/2 (d_o^2 - d^T d)`` (13), row
+  ``j_o^T = d^T J_po`` (15), feed-forward ``d_o ddot_o + d^T cdot`` (14).
+- ``"normalized"``: ``e_o = d_o - |d|``, row ``n^T J_po``, feed-forward
+  ``n^T cdot``, with ``n = d / |d|``: the same direction, a row whose size
+  does not shrink with ``|d|`` (METHOD.md, "Implementation notes").
+
+``J_po`` is the Jacobian of ``p_o`` fixed on its link at that instant
+(``LOCAL_WORLD_ALIGNED``). When the link touches or penetrates the obstacle
+(signed distance ``<= 0``), ``n`` is taken along coal's contact normal, so the
+row still pushes the link out; the squared form then uses ``e_o = 1/2 (d_o^2 - s|s|)``
+with ``s`` the signed distance, which stays monotonic inside the obstacle.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+FORMS = ("normalized", "squared")
+
+
+def point_jacobian(model: pin.Model, data: pin.Data, joint: int, point: np.ndarray) -> np.ndarray:
+    """Linear Jacobian (3, nv) of a point fixed on joint ``joint``'s body, world-aligned.
+
+    Needs ``computeJointJacobians`` at the current configuration.
+    """
+    local = pin.SE3(np.eye(3), data.oMi[joint].actInv(point))
+    return pin.getFrameJacobian(model, data, joint, local, pin.LOCAL_WORLD_ALIGNED)[:3]
+
+
+def obstacle_row(
+    form: str,
+    threshold: float,
+    distance: float,
+    p_link: np.ndarray,
+    p_obstacle: np.ndarray,
+    normal: np.ndarray,
+    J_point: np.ndarray,
+    obstacle_velocity: np.ndarray,
+    out: np.ndarray,
+) -> tuple[float, float]:
+    """Fill the row ``j_o`` (nv,) into ``out``; return the error ``e_o`` and feed-forward.
+
+    Args:
+        form: ``"normalized"`` or ``"squared"``.
+        threshold: ``d_o`` [m].
+        distance: Signed link-obstacle distance [m] (negative in penetration).
+        p_link, p_obstacle: Witness points on the link and on the obstacle [m].
+        normal: coal's unit normal from the link toward the obstacle.
+        J_point: Linear Jacobian of ``p_link`` (3, nv).
+        obstacle_velocity: ``cdot`` [m/s].
+        out: Row output (nv,).
+    """
+    d = p_link - p_obstacle
+    norm = float(np.linalg.norm(d))
+    if distance > 1e-9 and norm > 1e-12:
+        n = d / norm
+    else:  # contact or penetration: push out along the contact normal
+        n = -np.asarray(normal, dtype=float)
+    if form == "normalized":
+        np.dot(n, J_point, out=out)
+        return threshold - distance, float(n @ obstacle_velocity)
+    # squared form with the distance's sign kept, e_o = 1/2 (d_o^2 - s |s|), s the signed
+    # distance: (13) outside the obstacle, still monotonic inside it.
+    scale = abs(distance)
+    np.dot(n, J_point, out=out)
+    out *= scale
+    return 0.5 * (threshold**2 - distance * scale), scale * float(n @ obstacle_velocity)

@@ -1,0 +1,149 @@
+"""The one exception hierarchy of clik.
+
+Every error clik raises on bad input is a :class:`ClikError` subclass. Each
+subclass keeps the data it was built from as attributes and builds its message
+from them, so a caller can either show the message or react to the fields.
+
+The command line maps each family to an exit code (see :data:`EXIT_CODES`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+
+
+def _listing(names: Iterable[str], limit: int = 40) -> str:
+    """Comma-separated list of names, shortened past ``limit`` entries."""
+    names = list(names)
+    shown = ", ".join(repr(n) for n in names[:limit])
+    if len(names) > limit:
+        shown += f", ... ({len(names) - limit} more)"
+    return shown
+
+
+class ClikError(Exception):
+    """Root of every error clik raises on purpose."""
+
+    exit_code: int = 2
+
+
+class InputError(ClikError, ValueError):
+    """A value given by the user is not what was expected.
+
+    Attributes:
+        field: Name of the bad field (a parameter or a key path).
+        expected: What was expected, in words.
+        got: What was given (shown in the message when not None).
+    """
+
+    def __init__(self, field: str, expected: str, got: object = None) -> None:
+        self.field = field
+        self.expected = expected
+        self.got = got
+        message = f"{field}: expected {expected}"
+        if got is not None:
+            message += f", got {got!r}"
+        super().__init__(message)
+
+
+class RobotLoadError(ClikError):
+    """A robot could not be loaded.
+
+    Attributes:
+        source: The file path or robot name that was asked for.
+        problem: What is wrong, in words.
+        line: Line number in the file, when known.
+    """
+
+    def __init__(self, source: str | Path, problem: str, line: int | None = None) -> None:
+        self.source = str(source)
+        self.problem = problem
+        self.line = line
+        where = f"{self.source}, line {line}" if line is not None else self.source
+        super().__init__(f"cannot load robot {where}: {problem}")
+
+
+class UnknownRobotError(RobotLoadError):
+    """A robot name that is neither a file, one of ours, nor in example-robot-data."""
+
+    def __init__(self, name: str, available: Iterable[str]) -> None:
+        self.available = sorted(available)
+        super().__init__(
+            name,
+            "no such file and no robot of that name; available robot names: "
+            + _listing(self.available, limit=200),
+        )
+
+
+class FrameNotFound(ClikError, KeyError):
+    """A frame name that the model does not have.
+
+    Attributes:
+        name: The name asked for.
+        frames: The model's frame names.
+    """
+
+    def __init__(self, name: str, frames: Iterable[str]) -> None:
+        self.name = name
+        self.frames = list(frames)
+        super().__init__(f"frame {name!r} not found; available frames: {_listing(self.frames)}")
+
+    def __str__(self) -> str:  # KeyError quotes its message otherwise
+        return str(self.args[0])
+
+
+class JointNotFound(ClikError, KeyError):
+    """A joint name that the model does not have.
+
+    Attributes:
+        name: The name asked for.
+        joints: The model's joint names.
+    """
+
+    def __init__(self, name: str, joints: Iterable[str]) -> None:
+        self.name = name
+        self.joints = list(joints)
+        super().__init__(f"joint {name!r} not found; available joints: {_listing(self.joints)}")
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+class ScenarioError(ClikError):
+    """A scenario (or sweep) file is malformed.
+
+    Attributes:
+        file: The scenario file.
+        key: The key path, e.g. ``trajectory.duration`` (empty for the file itself).
+        expected: What was expected there, in words.
+    """
+
+    def __init__(self, file: str | Path, key: str, expected: str) -> None:
+        self.file = str(file)
+        self.key = key
+        self.expected = expected
+        where = f"{self.file}: {key}" if key else self.file
+        super().__init__(f"{where}: {expected}")
+
+
+class OutputExistsError(ClikError, FileExistsError):
+    """An output folder exists already and ``force`` was not given."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = str(path)
+        super().__init__(f"output folder {self.path} exists already; pass --force to overwrite it")
+
+
+class GeometryError(ClikError, ValueError):
+    """An obstacle or link geometry is degenerate or cannot be read."""
+
+
+class InfeasibleError(ClikError):
+    """A request that is well-formed but cannot be met (e.g. an impossible start)."""
+
+    exit_code = 3
+
+
+EXIT_CODES = {"bad_input": 2, "infeasible": 3, "internal": 4}
+"""Exit codes of the command line: bad input, infeasible problem, internal error."""

@@ -1,0 +1,174 @@
+"""What a tracking run returns: the joint trajectory, the task record, the status.
+
+Arrays are sampled at ``t`` (every ``record_every``-th sample of the run, and
+always the last one). Scalars such as ``max_task_error`` and ``joint_min``
+are taken over *every* sample of the run, recorded or not.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from clik.robot import Robot
+
+STATUSES = ("completed", "deadlock", "diverged", "converged", "max_iterations")
+"""Run statuses: ``completed`` (reached the end of the trajectory), ``deadlock``
+(Remark 2: ``|J_e^T e_e|`` ~ 0 while ``|e_e|`` is not), ``diverged`` (a
+non-finite value appeared), and for solve mode ``converged`` / ``max_iterations``."""
+
+_ARRAYS = (
+    "t",
+    "q",
+    "qdot",
+    "qddot",
+    "position",
+    "reference_position",
+    "task_error_norm",
+    "orientation_error_norm",
+    "min_obstacle_distance",
+    "active_count",
+)
+
+
+@dataclass
+class TrackingResult:
+    """Outcome of :func:`clik.track`.
+
+    Attributes:
+        t: Sample times (N,) [s].
+        q: Joint positions (N, nq) [rad or m].
+        qdot: Joint velocities (N, nv) from the law [rad/s].
+        qddot: Joint accelerations (N, nv), backward differences of ``qdot`` [rad/s^2].
+        position: Task frame origin in the world (N, 3) [m].
+        reference_position: Desired frame origin (N, 3) [m], or None for an orientation task.
+        task_error_norm: Norm of the position rows of the task error (N,) [m]; for a pure
+            orientation task, of the orientation rows [rad].
+        orientation_error_norm: Norm of the orientation rows (N,) [rad], or None.
+        status: One of :data:`STATUSES`.
+        reason: Why the run stopped, in words.
+        wall_time_s: Wall time of the loop [s].
+        steps: Number of CLIK iterations run.
+        max_task_error: Maximum of the task error norm over every step [m or rad].
+        final_task_error: Task error norm at the last step [m or rad].
+        joint_min: Minimum of each joint over every step (nq,).
+        joint_max: Maximum of each joint over every step (nq,).
+        events: Constraint events ``{"t", "constraint", "action"}`` (see ``clik.constraints``).
+        min_obstacle_distance: Minimum link-obstacle distance per sample (N,) [m], or None.
+        info: Free-form metadata (robot, frame, law, gain, dt, ...), JSON-serialisable.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qdot: np.ndarray
+    qddot: np.ndarray
+    position: np.ndarray
+    reference_position: np.ndarray | None
+    task_error_norm: np.ndarray
+    orientation_error_norm: np.ndarray | None
+    status: str
+    reason: str
+    wall_time_s: float
+    steps: int
+    max_task_error: float
+    final_task_error: float
+    joint_min: np.ndarray
+    joint_max: np.ndarray
+    events: list[dict[str, Any]] = field(default_factory=list)
+    min_obstacle_distance: np.ndarray | None = None
+    active_count: np.ndarray | None = None
+    info: dict[str, Any] = field(default_factory=dict)
+    extra: dict[str, np.ndarray] = field(default_factory=dict)
+    robot: Robot | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def success(self) -> bool:
+        """True when the run reached the end of its trajectory."""
+        return self.status == "completed"
+
+    def summary(self) -> dict[str, Any]:
+        """The run's numbers as a JSON-ready dict (the ``summary.json`` contract)."""
+        summary: dict[str, Any] = {
+            "status": self.status,
+            "reason": self.reason,
+            "steps": int(self.steps),
+            "wall_time_s": float(self.wall_time_s),
+            "max_task_error": float(self.max_task_error),
+            "final_task_error": float(self.final_task_error),
+            "joint_min": [float(v) for v in self.joint_min],
+            "joint_max": [float(v) for v in self.joint_max],
+            "events": [dict(e) for e in self.events],
+        }
+        if self.orientation_error_norm is not None and self.reference_position is not None:
+            summary["max_orientation_error"] = float(np.max(self.orientation_error_norm))
+        summary.update(self.info.get("summary_extra", {}))
+        summary["info"] = {k: v for k, v in self.info.items() if k != "summary_extra"}
+        return summary
+
+    # -- persistence -------------------------------------------------------------------
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the result to a ``.npz`` file (atomically: a temporary file, then a rename)."""
+        path = Path(path)
+        arrays = {name: getattr(self, name) for name in _ARRAYS if getattr(self, name) is not None}
+        arrays.update({f"extra_{k}": v for k, v in self.extra.items()})
+        arrays["joint_min"] = self.joint_min
+        arrays["joint_max"] = self.joint_max
+        meta = {
+            "status": self.status,
+            "reason": self.reason,
+            "wall_time_s": self.wall_time_s,
+            "steps": self.steps,
+            "max_task_error": self.max_task_error,
+            "final_task_error": self.final_task_error,
+            "events": self.events,
+            "info": self.info,
+        }
+        arrays["meta_json"] = np.array(json.dumps(meta))
+        atomic_write(path, lambda f: np.savez_compressed(f, **arrays))
+        return path
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> TrackingResult:
+        """Read a result written by :meth:`save` (without its robot)."""
+        with np.load(path, allow_pickle=False) as npz:
+            arrays = {k: npz[k] for k in npz.files}
+        meta = json.loads(str(arrays.pop("meta_json")))
+        extra = {k[6:]: arrays.pop(k) for k in list(arrays) if k.startswith("extra_")}
+        kwargs = {name: arrays.get(name) for name in _ARRAYS}
+        return cls(
+            **kwargs,
+            joint_min=arrays["joint_min"],
+            joint_max=arrays["joint_max"],
+            extra=extra,
+            **meta,
+        )
+
+
+def atomic_write(path: Path, write: Any, mode: str = "wb") -> None:
+    """Write ``path`` through ``write(file)`` into a temporary file, then rename it.
+
+    A run killed midway leaves either the old file or none, never a truncated one.
+    """
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, mode) as f:
+            write(f)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_json(path: Path, data: Any) -> None:
+    """Write ``data`` as indented JSON, atomically."""
+    text = json.dumps(data, indent=2, allow_nan=False)
+    atomic_write(path, lambda f: f.write(text + "\n"), mode="w")

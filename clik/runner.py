@@ -1,0 +1,142 @@
+"""Turn a validated :class:`~clik.scenario.Scenario` into objects, and run it.
+
+Errors raised while building (an unknown frame, an infeasible trajectory
+timing, an unknown joint in a lock or override) are re-raised as
+:class:`~clik.errors.ScenarioError` naming the scenario file and key path.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from clik.errors import ClikError, FrameNotFound, InputError, JointNotFound, ScenarioError
+from clik.result import TrackingResult
+from clik.robot import Robot
+from clik.scenario import Scenario, load_scenario
+from clik.task import Task
+from clik.tracking import ProgressCallback, Tracker
+from clik.trajectory import Circle, Hold, Line, PoseTrajectory, Slerp, Trajectory, Waypoints
+
+
+@dataclass
+class Run:
+    """Everything a scenario builds: robot, task, trajectory, tracker and start."""
+
+    scenario: Scenario
+    robot: Robot
+    task: Task
+    trajectory: Trajectory
+    tracker: Tracker
+    q0: np.ndarray
+
+    def execute(self, progress: ProgressCallback | None = None) -> TrackingResult:
+        """Run the tracking loop."""
+        result = self.tracker.run(
+            self.trajectory,
+            self.q0,
+            record_every=self.scenario.solver["record_every"],
+            settle=self.scenario.solver["settle"],
+            progress=progress,
+        )
+        result.info["scenario"] = self.scenario.name
+        return result
+
+
+def _where(scenario: Scenario, key: str, exc: ClikError) -> ScenarioError:
+    return ScenarioError(scenario.file, key, str(exc))
+
+
+def build(scenario: Scenario | str | Path) -> Run:
+    """Build the objects of a scenario (loads the robot; computes nothing else)."""
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    spec = scenario.robot
+    try:
+        robot = Robot.load(
+            spec["source"], package_dirs=spec["package_dirs"] or None, lock=spec["lock"] or None
+        )
+    except JointNotFound as exc:
+        raise _where(scenario, "robot.lock", exc) from None
+    except ClikError as exc:
+        raise _where(scenario, "robot.source", exc) from None
+    try:
+        q0 = robot.check_configuration(
+            robot.q_reference if scenario.initial_q is None else scenario.initial_q, "initial.q"
+        )
+    except InputError as exc:
+        raise _where(scenario, "initial.q", exc) from None
+    try:
+        task = Task(robot, scenario.task["frame"], scenario.task["kind"], scenario.task["axes"])
+    except FrameNotFound as exc:
+        raise _where(scenario, "task.frame", exc) from None
+    except InputError as exc:
+        raise _where(scenario, exc.field, exc) from None
+    start = task.placement(q0)
+    try:
+        trajectory = build_trajectory(scenario.trajectory, task, start)
+    except InputError as exc:
+        raise _where(scenario, f"trajectory.{exc.field}", exc) from None
+    constraints = None
+    if scenario.obstacles or any(
+        c.get("enabled") for c in scenario.constraints.values() if isinstance(c, dict)
+    ):
+        from clik.constraints.build import build_constraints
+
+        constraints = build_constraints(scenario, robot, task)
+    solver = scenario.solver
+    try:
+        tracker = Tracker(
+            task,
+            law=solver["law"],
+            gain=solver["gain"],
+            dt=solver["dt"],
+            damping=solver["damping"],
+            constraints=constraints,
+        )
+    except InputError as exc:
+        raise _where(scenario, f"solver.{exc.field}", exc) from None
+    return Run(scenario, robot, task, trajectory, tracker, q0)
+
+
+def build_trajectory(spec: dict[str, Any], task: Task, start: pin.SE3) -> Trajectory:
+    """The trajectory of a scenario's ``[trajectory]`` table, starting at the frame's pose."""
+    p0 = start.translation.copy() if spec["start"] is None else np.asarray(spec["start"])
+    kind, duration, speed = spec["kind"], spec["duration"], spec.get("cruise_speed")
+    position: Trajectory
+    if kind == "line":
+        position = Line(p0, spec["goal"], duration=duration, cruise_speed=speed)
+    elif kind == "circle":
+        position = Circle.through(
+            p0, spec["center"], spec["normal"], spec["angle"], duration=duration, cruise_speed=speed
+        )
+    elif kind == "waypoints":
+        points = np.vstack([p0, np.asarray(spec["points"])])
+        position = Waypoints(
+            points, duration=duration, cruise_speed=speed, blend_radius=spec["blend_radius"]
+        )
+    else:
+        goal = p0 if spec["goal"] is None else np.asarray(spec["goal"])
+        position = Hold(position=goal, duration=duration)
+    if not task.has_orientation:
+        return position
+    R0 = start.rotation.copy()
+    rpy = spec["goal_rpy"]
+    if rpy is None:
+        orientation: Trajectory = Hold(rotation=R0, duration=position.duration)
+    else:
+        orientation = Slerp(R0, pin.rpy.rpyToMatrix(*rpy), duration=position.duration)
+    if not task.has_position:
+        return orientation
+    return PoseTrajectory(position, orientation)
+
+
+def run_scenario(
+    scenario: Scenario | str | Path, progress: ProgressCallback | None = None
+) -> TrackingResult:
+    """Load, build and run a scenario file; returns the tracking result."""
+    return build(scenario).execute(progress)

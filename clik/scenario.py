@@ -1,0 +1,262 @@
+"""Scenario files: one TOML file names everything a run needs.
+
+The keys are a contract (see the README). Relative paths resolve against the
+scenario file's folder. A scenario is validated completely before anything
+is computed: an unknown key, a wrong type, a missing required field or an
+out-of-range value raises :class:`~clik.errors.ScenarioError` naming the file,
+the key path (e.g. ``trajectory.duration``) and what was expected.
+
+Angles are given in the table's ``unit`` (``"rad"`` by default, or
+``"deg"``) and converted once, here.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from clik.errors import ClikError, ScenarioError
+from clik.schema import Table
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+TRAJECTORY_KINDS = ("line", "circle", "waypoints", "hold")
+SHAPES = ("sphere", "box", "capsule", "cylinder", "mesh")
+UNITS = ("rad", "deg")
+
+
+def _angle_scale(table: Table) -> float:
+    return math.pi / 180.0 if table.string("unit", "rad", UNITS) == "deg" else 1.0
+
+
+@dataclass
+class Scenario:
+    """A validated scenario. Angles are in radians, lengths in metres, times in seconds."""
+
+    file: Path
+    name: str
+    robot: dict[str, Any]
+    initial_q: list[float] | None
+    task: dict[str, Any]
+    trajectory: dict[str, Any]
+    solver: dict[str, Any]
+    obstacles: list[dict[str, Any]] = field(default_factory=list)
+    constraints: dict[str, Any] = field(default_factory=dict)
+    raw: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    @property
+    def folder(self) -> Path:
+        """Folder that relative paths resolve against."""
+        return self.file.parent
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario file."""
+    path = Path(path)
+    if not path.is_file():
+        raise ScenarioError(path, "", "no such scenario file")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ScenarioError(path, "", f"not valid TOML ({exc})") from None
+    return parse_scenario(data, path)
+
+
+def _resolve(folder: Path, value: str) -> str:
+    p = Path(value).expanduser()
+    return str(p if p.is_absolute() else (folder / p))
+
+
+def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
+    """Validate a scenario given as a dict (as read from TOML)."""
+    file = Path(file)
+    folder = file.parent
+    top = Table(data, file)
+    name = top.string("name", file.stem)
+
+    rob = top.table("robot", required=True)
+    source = rob.string("source")
+    looks_like_path = source.endswith(".urdf") or "/" in source or "\\" in source
+    robot = {
+        "source": _resolve(folder, source) if looks_like_path else source,
+        "package_dirs": [_resolve(folder, p) for p in _strings(rob, "package_dirs")],
+        "lock": rob.mapping("lock", lambda t, k: float(t.number(k))),
+    }
+    rob.done()
+
+    ini = top.table("initial")
+    scale = _angle_scale(ini)
+    q_raw = ini.raw("q", "reference")
+    if q_raw == "reference":
+        initial_q = None
+    else:
+        initial_q = [v * scale for v in ini.vector("q")]
+    ini.done()
+
+    tsk = top.table("task", required=True)
+    task = {
+        "frame": tsk.string("frame"),
+        "kind": tsk.string("kind", "pose", ("position", "orientation", "pose")),
+        "axes": _strings(tsk, "axes") or None,
+    }
+    tsk.done()
+
+    trajectory = _trajectory(top.table("trajectory", required=True), folder)
+
+    slv = top.table("solver")
+    gain = slv.raw("gain", 1000.0)
+    if isinstance(gain, list):
+        gain = slv.vector("gain")
+        if any(g <= 0 for g in gain):
+            raise slv.error("gain", "positive numbers [1/s]", gain)
+    else:
+        gain = slv.number("gain", 1000.0, minimum=0.0, strict=True, unit="[1/s]")
+    solver = {
+        "law": slv.string("law", "transpose", ("transpose", "nonlinear", "pseudoinverse")),
+        "gain": gain,
+        "dt": slv.number("dt", 1e-3, minimum=0.0, strict=True, unit="[s]"),
+        "damping": slv.number("damping", 0.0, minimum=0.0),
+        "record_every": slv.number("record_every", 1, minimum=1, integer=True),
+        "settle": slv.number("settle", 0.0, minimum=0.0, unit="[s]"),
+    }
+    slv.done()
+
+    obstacles = [_obstacle(t, folder) for t in top.tables("obstacles")]
+    names = [o["name"] for o in obstacles]
+    if len(set(names)) != len(names):
+        raise ScenarioError(file, "obstacles", f"expected distinct obstacle names, got {names}")
+    constraints = _constraints(top.table("constraints"))
+    top.done()
+    return Scenario(
+        file, name, robot, initial_q, task, trajectory, solver, obstacles, constraints, raw=data
+    )
+
+
+def _strings(table: Table, name: str) -> list[str]:
+    value = table.raw(name, [])
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise table.error(name, "a list of strings", value)
+    return value
+
+
+def _trajectory(tr: Table, folder: Path) -> dict[str, Any]:
+    kind = tr.string("kind", choices=TRAJECTORY_KINDS)
+    scale = _angle_scale(tr)
+    out: dict[str, Any] = {"kind": kind}
+    out["start"] = tr.vector("start", 3, None, "[m]")
+    if kind in ("line", "hold"):
+        out["goal"] = tr.vector("goal", 3, None if kind == "hold" else ..., "[m]")
+        if out["goal"] is ...:
+            raise tr.error("goal", "a list of 3 numbers [m]")
+    if kind == "circle":
+        out["center"] = tr.vector("center", 3, unit="[m]")
+        out["normal"] = tr.vector("normal", 3, [0.0, 0.0, 1.0])
+        if np.linalg.norm(out["normal"]) == 0.0:
+            raise tr.error("normal", "a non-zero vector", out["normal"])
+        angle = tr.number("angle", None)
+        out["angle"] = 2.0 * math.pi if angle is None else angle * scale
+        if out["angle"] == 0.0:
+            raise tr.error("angle", "a non-zero angle", angle)
+    if kind == "waypoints":
+        out["points"] = tr.matrix("points", 3, unit="[m]")
+        out["blend_radius"] = tr.number("blend_radius", 0.0, minimum=0.0, unit="[m]")
+    out["duration"] = tr.number("duration", None, minimum=0.0, strict=kind != "hold", unit="[s]")
+    if kind != "hold":
+        out["cruise_speed"] = tr.number("cruise_speed", None, minimum=0.0, strict=True)
+    if kind == "hold" and out["duration"] is None:
+        raise tr.error("duration", "a number >= 0 [s]")
+    if kind != "hold" and out["duration"] is None and out.get("cruise_speed") is None:
+        raise tr.error("duration", "a duration [s] or a cruise_speed")
+    rpy = tr.vector("goal_rpy", 3, None)
+    out["goal_rpy"] = None if rpy is None else [v * scale for v in rpy]
+    tr.done()
+    return out
+
+
+def _obstacle(ob: Table, folder: Path) -> dict[str, Any]:
+    shape = ob.string("shape", choices=SHAPES)
+    out: dict[str, Any] = {
+        "name": ob.string("name"),
+        "shape": shape,
+        "position": ob.vector("position", 3, unit="[m]"),
+    }
+    scale = _angle_scale(ob)
+    rpy = ob.vector("rpy", 3, [0.0, 0.0, 0.0])
+    out["rpy"] = [v * scale for v in rpy]
+    out["velocity"] = ob.vector("velocity", 3, [0.0, 0.0, 0.0], "[m/s]")
+    out["threshold"] = ob.number("threshold", None, minimum=0.0, strict=True, unit="[m]")
+    if shape == "sphere":
+        out["radius"] = ob.number("radius", minimum=0.0, unit="[m]")
+    elif shape == "box":
+        size = ob.vector("size", 3, unit="[m]")
+        if any(s <= 0 for s in size):
+            raise ob.error("size", "three positive side lengths [m]", size)
+        out["size"] = size
+    elif shape in ("capsule", "cylinder"):
+        out["radius"] = ob.number("radius", minimum=0.0, strict=shape == "cylinder", unit="[m]")
+        out["length"] = ob.number("length", minimum=0.0, strict=shape == "cylinder", unit="[m]")
+    else:
+        file = ob.string("file")
+        out["file"] = _resolve(Path(ob.file).parent, file)
+        out["scale"] = ob.vector("scale", 3, [1.0, 1.0, 1.0])
+    ob.done()
+    return out
+
+
+def _constraints(ct: Table) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    obs = ct.table("obstacles")
+    out["obstacles"] = {
+        "enabled": obs.boolean("enabled", False),
+        "threshold": obs.number("threshold", 0.03, minimum=0.0, strict=True, unit="[m]"),
+        "gain": obs.number("gain", None, minimum=0.0, strict=True, unit="[1/s]"),
+        "form": obs.string("form", "normalized", ("normalized", "squared")),
+        "release": obs.string("release", None, ("projection", "sign")),
+        "links": _strings(obs, "links") or None,
+    }
+    obs.done()
+    jl = ct.table("joint_limits")
+    scale = _angle_scale(jl)
+    override: dict[str, dict[str, float]] = {}
+    ov = jl.table("override")
+    for joint in list(ov.data):
+        sub = ov.table(joint)
+        lim = {k: sub.number(k, None) for k in ("lower", "upper")}
+        sub.done()
+        override[joint] = {k: v * scale for k, v in lim.items() if v is not None}
+    out["joint_limits"] = {
+        "enabled": jl.boolean("enabled", False),
+        "threshold": jl.number(
+            "threshold", 2.0 if scale != 1.0 else math.radians(2.0), minimum=0.0, strict=True
+        )
+        * scale,
+        "gain": jl.number("gain", None, minimum=0.0, strict=True, unit="[1/s]"),
+        "override": override,
+    }
+    jl.done()
+    sc = ct.table("self_collision")
+    out["self_collision"] = {
+        "enabled": sc.boolean("enabled", False),
+        "threshold": sc.number("threshold", 0.01, minimum=0.0, strict=True, unit="[m]"),
+        "gain": sc.number("gain", None, minimum=0.0, strict=True, unit="[1/s]"),
+    }
+    sc.done()
+    out["release"] = ct.string("release", "projection", ("projection", "sign"))
+    out["hysteresis"] = ct.number("hysteresis", 0.0, minimum=0.0)
+    ct.done()
+    return out
+
+
+def scenario_error_context(exc: ClikError, file: Path) -> ClikError:
+    """Attach the scenario file to an error raised while building its objects."""
+    if isinstance(exc, ScenarioError):
+        return exc
+    return ScenarioError(file, getattr(exc, "field", ""), str(exc))

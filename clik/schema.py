@@ -1,0 +1,162 @@
+"""A small validator for TOML tables: typed reads that name the key path on error.
+
+Every read goes through a :class:`Table`, which remembers the file and the key
+path, so an error says e.g. ``case.toml: trajectory.duration: expected a
+positive number [s], got -1``. :meth:`Table.done` rejects keys that were
+never read (unknown keys), listing the valid ones.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from clik.errors import ScenarioError
+
+_MISSING = object()
+
+
+class Table:
+    """A TOML table being validated.
+
+    Args:
+        data: The table's dict.
+        file: The file it came from (for messages).
+        path: Its key path (``""`` for the top level).
+    """
+
+    def __init__(self, data: dict[str, Any], file: str | Path, path: str = "") -> None:
+        self.data = data
+        self.file = file
+        self.path = path
+        self._read: set[str] = set()
+
+    def key(self, name: str) -> str:
+        """Full key path of ``name`` in this table."""
+        return f"{self.path}.{name}" if self.path else name
+
+    def error(self, name: str, expected: str, got: Any = _MISSING) -> ScenarioError:
+        """A :class:`ScenarioError` for key ``name``."""
+        message = f"expected {expected}"
+        if got is not _MISSING:
+            message += f", got {got!r}"
+        return ScenarioError(self.file, self.key(name), message)
+
+    def has(self, name: str) -> bool:
+        """Whether the key is present."""
+        return name in self.data
+
+    def raw(self, name: str, default: Any = _MISSING) -> Any:
+        """The value of ``name``; a missing required key raises."""
+        self._read.add(name)
+        if name not in self.data:
+            if default is _MISSING:
+                raise ScenarioError(self.file, self.key(name), "required key is missing")
+            return default
+        return self.data[name]
+
+    def table(self, name: str, required: bool = False) -> Table:
+        """The sub-table ``name`` (an empty one when absent and not required)."""
+        value = self.raw(name, _MISSING if required else {})
+        if not isinstance(value, dict):
+            raise self.error(name, "a table", value)
+        return Table(value, self.file, self.key(name))
+
+    def tables(self, name: str) -> list[Table]:
+        """An array of tables (``[[name]]``); empty when absent."""
+        value = self.raw(name, [])
+        if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+            raise self.error(name, "an array of tables ([[...]])", value)
+        return [Table(v, self.file, f"{self.key(name)}[{i}]") for i, v in enumerate(value)]
+
+    def string(
+        self, name: str, default: Any = _MISSING, choices: Sequence[str] | None = None
+    ) -> Any:
+        """A string, optionally one of ``choices``."""
+        value = self.raw(name, default)
+        if value is default and default is not _MISSING:
+            return value
+        if not isinstance(value, str):
+            raise self.error(name, "a string", value)
+        if choices is not None and value not in choices:
+            raise self.error(name, "one of " + ", ".join(repr(c) for c in choices), value)
+        return value
+
+    def boolean(self, name: str, default: Any = _MISSING) -> Any:
+        """A boolean."""
+        value = self.raw(name, default)
+        if not isinstance(value, bool):
+            raise self.error(name, "true or false", value)
+        return value
+
+    def number(
+        self,
+        name: str,
+        default: Any = _MISSING,
+        minimum: float | None = None,
+        strict: bool = False,
+        unit: str = "",
+        integer: bool = False,
+    ) -> Any:
+        """A finite number, ``>= minimum`` (``> minimum`` when ``strict``)."""
+        value = self.raw(name, default)
+        if value is default and default is not _MISSING:
+            return value
+        kind = "an integer" if integer else "a number"
+        if minimum is not None:
+            kind = f"{kind} {'>' if strict else '>='} {minimum:g}"
+        if unit:
+            kind += f" {unit}"
+        ok_type = isinstance(value, int) if integer else isinstance(value, int | float)
+        if isinstance(value, bool) or not ok_type or not math.isfinite(value):
+            raise self.error(name, kind, value)
+        if minimum is not None and (value <= minimum if strict else value < minimum):
+            raise self.error(name, kind, value)
+        return value
+
+    def vector(
+        self, name: str, size: int | None = None, default: Any = _MISSING, unit: str = ""
+    ) -> Any:
+        """A list of finite numbers (of length ``size`` when given)."""
+        value = self.raw(name, default)
+        if value is default and default is not _MISSING:
+            return value
+        expected = f"a list of {size if size else 'N'} numbers{(' ' + unit) if unit else ''}"
+        if not isinstance(value, list) or (size is not None and len(value) != size):
+            raise self.error(name, expected, value)
+        if not all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+            for v in value
+        ):
+            raise self.error(name, expected + " (finite)", value)
+        return [float(v) for v in value]
+
+    def matrix(self, name: str, columns: int, default: Any = _MISSING, unit: str = "") -> Any:
+        """A list of lists of ``columns`` finite numbers."""
+        value = self.raw(name, default)
+        if value is default and default is not _MISSING:
+            return value
+        expected = f"a list of [{', '.join(['x', 'y', 'z'][:columns])}] points {unit}".rstrip()
+        if not isinstance(value, list) or not value:
+            raise self.error(name, expected, value)
+        out = []
+        for i, row in enumerate(value):
+            sub = Table({"row": row}, self.file, f"{self.key(name)}[{i}]")
+            out.append(sub.vector("row", columns, unit=unit))
+        return out
+
+    def mapping(self, name: str, check: Callable[[Table, str], Any]) -> dict[str, Any]:
+        """A table of arbitrary keys, each value read by ``check(table, key)``."""
+        sub = self.table(name)
+        return {k: check(sub, k) for k in list(sub.data)}
+
+    def done(self) -> None:
+        """Raise on any key that was not read (an unknown key)."""
+        unknown = sorted(set(self.data) - self._read)
+        if unknown:
+            valid = ", ".join(sorted(self._read))
+            raise ScenarioError(
+                self.file, self.key(unknown[0]), f"unknown key; valid keys here: {valid}"
+            )

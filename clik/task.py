@@ -1,0 +1,144 @@
+"""The task: where a frame of the robot must be, as rows of the task vector.
+
+The full task of a frame is six components, ``(x, y, z, rx, ry, rz)``: the
+frame origin's position in the world frame and its orientation. A task keeps
+a subset of them (its *mask*), so a planar arm tracks ``(x, y)`` and a tool
+may track its position plus one axis of orientation.
+
+Convention (one for the whole package, ``LOCAL_WORLD_ALIGNED``): velocities
+and Jacobian rows are expressed in the world frame at the frame's origin.
+
+- Position error (METHOD.md, ``e = x_d - x``): ``e_p = p_d - p`` [m].
+- Orientation error: ``e_r = log3(R_d R^T)`` [rad], the rotation vector, in
+  the world frame, that turns the current orientation ``R`` into ``R_d``.
+  Its time derivative is ``omega_d - omega`` to first order in ``|e_r|``, so
+  the task Jacobian of eq. (3) is the frame's geometric Jacobian
+  ``J = (J_v; J_omega)``, masked to the task's rows.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+import pinocchio as pin
+
+from clik.errors import InputError
+
+if TYPE_CHECKING:
+    from clik.robot import Robot
+
+TaskKind = Literal["position", "orientation", "pose"]
+
+AXES: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
+"""Names of the six components of a frame task, in row order."""
+
+_KIND_AXES: dict[str, tuple[int, ...]] = {
+    "position": (0, 1, 2),
+    "orientation": (3, 4, 5),
+    "pose": (0, 1, 2, 3, 4, 5),
+}
+
+
+class Task:
+    """A position, orientation or pose task on one frame, with a component mask.
+
+    Args:
+        robot: The robot whose frame is tracked.
+        frame: Name of the frame (see ``robot.frame_names``).
+        kind: ``"position"`` (3 rows), ``"orientation"`` (3 rows) or ``"pose"`` (6 rows).
+        axes: Optional subset of the kind's components, among
+            ``"x", "y", "z", "rx", "ry", "rz"`` (e.g. ``["x", "y"]`` for a planar arm).
+
+    Attributes:
+        frame: Frame name.
+        frame_id: Pinocchio frame index.
+        kind: Task kind.
+        rows: Indices of the kept components in the six-vector ``(x, y, z, rx, ry, rz)``.
+        m: Task dimension, ``len(rows)``.
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        frame: str,
+        kind: TaskKind = "pose",
+        axes: Sequence[str] | None = None,
+    ) -> None:
+        if kind not in _KIND_AXES:
+            raise InputError("task.kind", "one of 'position', 'orientation', 'pose'", kind)
+        allowed = _KIND_AXES[kind]
+        if axes is None:
+            rows = allowed
+        else:
+            if isinstance(axes, str) or len(axes) == 0:
+                raise InputError("task.axes", "a non-empty list of axis names", axes)
+            valid = [AXES[i] for i in allowed]
+            bad = [a for a in axes if a not in valid]
+            if bad or len(set(axes)) != len(axes):
+                raise InputError(
+                    "task.axes", f"distinct names among {valid} for a {kind} task", list(axes)
+                )
+            rows = tuple(sorted(AXES.index(a) for a in axes))
+        self.robot = robot
+        self.frame = frame
+        self.frame_id = robot.frame_id(frame)
+        self.kind: TaskKind = kind
+        self.rows = np.asarray(rows, dtype=np.intp)
+        self.m = len(rows)
+        self.has_position = bool(np.any(self.rows < 3))
+        self.has_orientation = bool(np.any(self.rows >= 3))
+        # Contiguous masks are slices (views, no copy in the hot loop).
+        self._slice = (
+            slice(rows[0], rows[-1] + 1) if rows == tuple(range(rows[0], rows[-1] + 1)) else None
+        )
+
+    @property
+    def axes(self) -> list[str]:
+        """Names of the kept components, in row order."""
+        return [AXES[i] for i in self.rows]
+
+    @property
+    def position_rows(self) -> np.ndarray:
+        """Indices, within the task's rows, of the position components."""
+        return np.flatnonzero(self.rows < 3)
+
+    @property
+    def orientation_rows(self) -> np.ndarray:
+        """Indices, within the task's rows, of the orientation components."""
+        return np.flatnonzero(self.rows >= 3)
+
+    def __repr__(self) -> str:
+        return f"Task(frame={self.frame!r}, kind={self.kind!r}, axes={self.axes})"
+
+    # -- evaluation (used by the tracking loop and by tests) ---------------------------
+
+    def placement(self, q: np.ndarray) -> pin.SE3:
+        """Frame placement in the world at ``q`` (runs forward kinematics)."""
+        model, data = self.robot.model, self.robot.data
+        pin.framesForwardKinematics(model, data, q)
+        return data.oMf[self.frame_id].copy()
+
+    def full_error(
+        self, placement: pin.SE3, position_d: np.ndarray | None, rotation_d: np.ndarray | None
+    ) -> np.ndarray:
+        """Six-vector error ``(p_d - p, log3(R_d R^T))``; missing references give zero rows."""
+        e6 = np.zeros(6)
+        if position_d is not None:
+            e6[:3] = position_d - placement.translation
+        if rotation_d is not None:
+            e6[3:] = pin.log3(rotation_d @ placement.rotation.T)
+        return e6
+
+    def error(
+        self, q: np.ndarray, position_d: np.ndarray | None, rotation_d: np.ndarray | None
+    ) -> np.ndarray:
+        """Masked task error ``e`` (m,) at ``q``: [m] for position rows, [rad] for orientation."""
+        return self.full_error(self.placement(q), position_d, rotation_d)[self.rows]
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        """Masked task Jacobian ``J`` (m, nv) at ``q``, eq. (3), ``LOCAL_WORLD_ALIGNED``."""
+        model, data = self.robot.model, self.robot.data
+        J6 = pin.computeFrameJacobian(model, data, q, self.frame_id, pin.LOCAL_WORLD_ALIGNED)
+        return J6[self.rows]

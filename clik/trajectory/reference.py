@@ -1,0 +1,113 @@
+"""The desired task trajectory, sampled on a time grid."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from clik.errors import InputError
+from clik.trajectory._validate import ROTATION_TOLERANCE
+
+_TRAILING_SHAPES: dict[str, tuple[int, ...]] = {
+    "position": (3,),
+    "linear_velocity": (3,),
+    "rotation": (3, 3),
+    "angular_velocity": (3,),
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Reference:
+    """A desired task trajectory sampled on a time grid (N samples).
+
+    This is what the solver tracks: ``x_d(t_k)`` and ``xdot_d(t_k)`` of
+    METHOD.md for every sample ``k``. Position and linear velocity come
+    together (both or neither), and so do rotation and angular velocity;
+    at least one of the two pairs is given. Velocities are expressed in the
+    world frame (``LOCAL_WORLD_ALIGNED``).
+
+    The arrays are converted to float arrays on construction and checked:
+    shapes consistent with ``t``, finite values, and rotation matrices
+    orthonormal with determinant +1 (to within ``1e-6``).
+
+    Attributes:
+        t: Sample times, shape (N,) [s].
+        position: Desired frame origin in the world frame, shape (N, 3) [m], or None.
+        linear_velocity: Its time derivative, shape (N, 3) [m/s], or None.
+        rotation: Desired frame orientation (world <- frame), shape (N, 3, 3), or None.
+        angular_velocity: Desired angular velocity in the world frame,
+            shape (N, 3) [rad/s], or None.
+
+    Raises:
+        InputError: ``trajectory: expected finite values, got '<array>[k] = ... at t = ... s'``
+            for NaN or inf, and an error naming the array for a bad shape or a
+            bad rotation matrix.
+    """
+
+    t: np.ndarray
+    position: np.ndarray | None = None
+    linear_velocity: np.ndarray | None = None
+    rotation: np.ndarray | None = None
+    angular_velocity: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        t = np.array(self.t, dtype=float)
+        if t.ndim != 1:
+            raise InputError("trajectory.t", "a 1-D array of times [s]", f"shape {t.shape}")
+        if not np.all(np.isfinite(t)):
+            k = int(np.flatnonzero(~np.isfinite(t))[0])
+            raise InputError("trajectory", "finite values", f"t[{k}] = {t[k]}")
+        object.__setattr__(self, "t", t)
+        n = t.shape[0]
+        for name, trailing in _TRAILING_SHAPES.items():
+            value = getattr(self, name)
+            if value is None:
+                continue
+            array = np.array(value, dtype=float)
+            if array.shape != (n, *trailing):
+                raise InputError(
+                    f"trajectory.{name}",
+                    f"shape {(n, *trailing)} for {n} samples",
+                    f"shape {array.shape}",
+                )
+            bad = ~np.isfinite(array.reshape(n, -1)).all(axis=1)
+            if bad.any():
+                k = int(np.flatnonzero(bad)[0])
+                shown = np.array2string(array[k], separator=", ").replace("\n", "")
+                raise InputError(
+                    "trajectory", "finite values", f"{name}[{k}] = {shown} at t = {t[k]:.6g} s"
+                )
+            object.__setattr__(self, name, array)
+        for first, second in (("position", "linear_velocity"), ("rotation", "angular_velocity")):
+            if (getattr(self, first) is None) != (getattr(self, second) is None):
+                raise InputError("trajectory", f"{first} and {second} both given or both None")
+        if self.position is None and self.rotation is None:
+            raise InputError("trajectory", "a position or a rotation (or both)")
+        if self.rotation is not None and n > 0:
+            rotation = self.rotation
+            gram = np.einsum("nji,njk->nik", rotation, rotation) - np.eye(3)
+            bad = (np.abs(gram).max(axis=(1, 2)) > ROTATION_TOLERANCE) | (
+                np.abs(np.linalg.det(rotation) - 1.0) > ROTATION_TOLERANCE
+            )
+            if bad.any():
+                k = int(np.flatnonzero(bad)[0])
+                raise InputError(
+                    "trajectory.rotation",
+                    "rotation matrices (R^T R = I, det R = +1)",
+                    f"a non-rotation at sample {k}, t = {t[k]:.6g} s",
+                )
+
+    def __len__(self) -> int:
+        """Number of samples N."""
+        return int(self.t.shape[0])
+
+    @property
+    def has_position(self) -> bool:
+        """Whether the reference gives a position (and a linear velocity)."""
+        return self.position is not None
+
+    @property
+    def has_rotation(self) -> bool:
+        """Whether the reference gives a rotation (and an angular velocity)."""
+        return self.rotation is not None

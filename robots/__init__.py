@@ -1,0 +1,1 @@
+"""Our own robot descriptions, shipped as package data (``clik.robots``)."""
