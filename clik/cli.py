@@ -1,4 +1,4 @@
-"""The ``clik`` command line: ``solve``, ``demo``, ``robots``, ``show``, ``bench``.
+"""The ``clik`` command line: ``solve``, ``demo``, ``robots``.
 
 Errors are printed without a traceback (``--debug`` shows it) and the exit
 code tells the kind: 0 success, 2 bad input, 3 infeasible (the run stopped
@@ -84,35 +84,16 @@ def cmd_solve(args: argparse.Namespace) -> int:
     out = prepare_out(Path(args.out), args.force)
     result = run.execute(ProgressBar(run.scenario.name, None if not args.quiet else False))
     summary = write_outputs(result, out)
-    _extras(args, [result], out, [run.scenario.name])
     if not args.quiet:
         print_summary(run.scenario.name, summary)
         print(f"  wrote {out / 'summary.json'} and {out / 'trajectory.npz'}")
     return EXIT_CODES["infeasible"] if result.status in INFEASIBLE_STATUSES else 0
 
 
-def _extras(
-    args: argparse.Namespace, results: list[TrackingResult], out: Path, names: list[str]
-) -> None:
-    """HTML scenes and plots, when asked for."""
-    if getattr(args, "html", False):
-        from clik.viz import export_html
-
-        for result, name in zip(results, names, strict=True):
-            target = out / "scene.html" if len(results) == 1 else out / f"{name}.html"
-            export_html(result, target)
-    if getattr(args, "plots", False):
-        from clik.plot import save_result_plots
-
-        save_result_plots(results, out, names)
-
-
 def cmd_demo(args: argparse.Namespace) -> int:
     from clik.demo import run_demo
 
-    return run_demo(
-        Path(args.out), force=args.force, html=args.html, plots=args.plots, quiet=args.quiet
-    )
+    return run_demo(Path(args.out), force=args.force, quiet=args.quiet)
 
 
 def cmd_robots(args: argparse.Namespace) -> int:
@@ -120,20 +101,6 @@ def cmd_robots(args: argparse.Namespace) -> int:
 
     for name, where in Robot.available().items():
         print(f"{name:32s} {where}")
-    return 0
-
-
-def cmd_show(args: argparse.Namespace) -> int:
-    from clik.viz import show_path
-
-    show_path(Path(args.target), block=not args.no_block)
-    return 0
-
-
-def cmd_bench(args: argparse.Namespace) -> int:
-    from clik.bench import run_bench
-
-    run_bench(Path(args.out), quick=args.quick)
     return 0
 
 
@@ -147,31 +114,18 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("scenario", type=Path)
     s.add_argument("--out", required=True, help="output folder")
     s.add_argument("--force", action="store_true", help="write into an existing output folder")
-    s.add_argument("--html", action="store_true", help="also write DIR/scene.html")
-    s.add_argument("--plots", action="store_true", help="also write PNG plots")
     s.add_argument("--quiet", action="store_true")
     s.set_defaults(func=cmd_solve)
 
     d = sub.add_parser("demo", help="run the paper's case study")
     d.add_argument("--out", default="out/demo")
     d.add_argument("--force", action="store_true")
-    d.add_argument("--plots", action="store_true", help="also write the paper's figures (PNG)")
-    d.add_argument("--html", action="store_true", help="also write one HTML scene per run")
     d.add_argument("--quiet", action="store_true")
     d.set_defaults(func=cmd_demo)
 
     r = sub.add_parser("robots", help="list the robots known by name")
     r.set_defaults(func=cmd_robots)
 
-    v = sub.add_parser("show", help="open the live 3-D view of a scenario or an output folder")
-    v.add_argument("target")
-    v.add_argument("--no-block", action="store_true", help="return once the scene is shown")
-    v.set_defaults(func=cmd_show)
-
-    b = sub.add_parser("bench", help="run the benchmark suite")
-    b.add_argument("--out", default="out/bench")
-    b.add_argument("--quick", action="store_true", help="a smoke run")
-    b.set_defaults(func=cmd_bench)
     return p
 
 

@@ -88,9 +88,16 @@ class CollisionScene:
             self.link_names.append(link)
             link_joint.append(go.parentJoint)
             local_radius.append(float(np.linalg.norm(go.placement.translation)) + radius)
+        # Bodies (joints) drawn but with no collision geometry at all: reported once.
         visual = robot.visual_model  # type: ignore[attr-defined]
-        drawn = {frame_names[g.parentFrame] for g in visual.geometryObjects if g.parentJoint > 0}
-        missing = sorted(drawn - set(known))
+        checked = {g.parentJoint for g in source.geometryObjects}
+        missing = sorted(
+            {
+                frame_names[g.parentFrame]
+                for g in visual.geometryObjects
+                if g.parentJoint > 0 and g.parentJoint not in checked
+            }
+        )
         self.links_without_geometry = missing
         if missing:
             warnings.warn(
