@@ -26,7 +26,7 @@ demo: $(VENV)/.installed
 	$(VENV)/bin/clik demo --out out/demo --force
 
 test: $(VENV)/.installed-test
-	$(PY) -m pytest tests $(if $(NOTEBOOKS),--nbmake --nbmake-timeout=300 $(NOTEBOOKS)) -q
+	$(PY) -m pytest tests $(if $(NOTEBOOKS),--nbmake --nbmake-timeout=120 $(NOTEBOOKS)) --timeout=600 -q
 
 lint: $(VENV)/.installed-test
 	$(PIP) install --quiet ruff

@@ -1,4 +1,4 @@
-"""The ``clik`` command line: ``solve``, ``demo``, ``robots``.
+"""The ``clik`` command line: ``solve``, ``demo``, ``robots``, ``show``.
 
 Errors are printed without a traceback (``--debug`` shows it) and the exit
 code tells the kind: 0 success, 2 bad input, 3 infeasible (the run stopped
@@ -84,16 +84,36 @@ def cmd_solve(args: argparse.Namespace) -> int:
     out = prepare_out(Path(args.out), args.force)
     result = run.execute(ProgressBar(run.scenario.name, None if not args.quiet else False))
     summary = write_outputs(result, out)
+    write_extras(args, result, out, run.scenario.name)
     if not args.quiet:
         print_summary(run.scenario.name, summary)
         print(f"  wrote {out / 'summary.json'} and {out / 'trajectory.npz'}")
     return EXIT_CODES["infeasible"] if result.status in INFEASIBLE_STATUSES else 0
 
 
+def write_extras(args: argparse.Namespace, result: TrackingResult, out: Path, name: str) -> None:
+    """``--html`` and ``--plots`` of ``clik solve``."""
+    if args.html:
+        from clik.viz import export_html
+
+        export_html(result, out / "scene.html")
+    if args.plots:
+        from clik.plot import save_result_plots
+
+        save_result_plots([result], out, [name])
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     from clik.demo import run_demo
 
     return run_demo(Path(args.out), force=args.force, quiet=args.quiet)
+
+
+def cmd_show(args: argparse.Namespace) -> int:
+    from clik.viz import show_path
+
+    show_path(Path(args.target), block=not args.no_block)
+    return 0
 
 
 def cmd_robots(args: argparse.Namespace) -> int:
@@ -114,14 +134,24 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("scenario", type=Path)
     s.add_argument("--out", required=True, help="output folder")
     s.add_argument("--force", action="store_true", help="write into an existing output folder")
+    s.add_argument("--html", action="store_true", help="also write DIR/scene.html")
+    s.add_argument("--plots", action="store_true", help="also write PNG plots")
     s.add_argument("--quiet", action="store_true")
     s.set_defaults(func=cmd_solve)
 
     d = sub.add_parser("demo", help="run the paper's case study")
     d.add_argument("--out", default="out/demo")
     d.add_argument("--force", action="store_true")
+    d.add_argument("--no-html", action="store_true", help="skip the HTML scenes")
+    d.add_argument("--plots", action="store_true", help="(default) the paper's figures as PNG")
+    d.add_argument("--no-plots", action="store_true", help="skip the figures")
     d.add_argument("--quiet", action="store_true")
     d.set_defaults(func=cmd_demo)
+
+    v = sub.add_parser("show", help="open the live 3-D view of a scenario or an output folder")
+    v.add_argument("target")
+    v.add_argument("--no-block", action="store_true", help="return once the scene is shown")
+    v.set_defaults(func=cmd_show)
 
     r = sub.add_parser("robots", help="list the robots known by name")
     r.set_defaults(func=cmd_robots)

@@ -48,6 +48,8 @@ def case_study_table(names: list[str], results: list[TrackingResult]) -> str:
 def run_demo(
     out: Path,
     force: bool = False,
+    html: bool = True,
+    plots: bool = True,
     quiet: bool = False,
     names: tuple[str, ...] = CASE_STUDY,
 ) -> int:
@@ -63,10 +65,23 @@ def run_demo(
         folder = out / name
         folder.mkdir(exist_ok=True)
         write_outputs(result, folder)
+        if html:
+            from clik.viz import export_html
+
+            export_html(result, out / f"{name}.html")
         results.append(result)
     table = case_study_table(list(names), results)
+    written: list[Path] = []
+    if plots:
+        from clik.plot import case_study_figures
+
+        written = case_study_figures(dict(zip(names, results, strict=True)), out)
     if not quiet:
         print(table)
         print(f"\nwrote {out}/<run>/summary.json and trajectory.npz for {len(names)} runs")
+        if html:
+            print(f"wrote {len(names)} HTML scenes: {out}/<run>.html")
+        if written:
+            print("wrote figures: " + ", ".join(str(p) for p in written))
     (out / "table.txt").write_text(table + "\n")
     return 0

@@ -44,6 +44,9 @@ class Run:
             progress=progress,
         )
         result.info["scenario"] = self.scenario.name
+        result.info["scenario_file"] = str(self.scenario.file.resolve())
+        result.info["robot_source"] = self.scenario.robot["source"]
+        result.info["robot_lock"] = dict(self.scenario.robot["lock"])
         return result
 
 

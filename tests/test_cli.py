@@ -167,3 +167,26 @@ def test_demo_runs_the_case_study(tmp_path, capsys):
         assert (out / name / "trajectory.npz").is_file()
     unconstrained = json.loads((out / "case_study_unconstrained" / "summary.json").read_text())
     assert unconstrained["max_task_error"] < 1e-3
+    assert len(list(out.glob("case_study_*.html"))) == 8
+    for law in ("law9", "law10"):
+        for fig in ("fig3_tracking_error", "fig4_obstacle_distance", "fig5_q3"):
+            assert (out / f"{fig}_{law}.png").stat().st_size > 10_000
+
+
+def test_solve_html_and_plots(tmp_path):
+    out = tmp_path / "o"
+    scenario = str(scenario_path("case_study_both"))
+    assert main(["solve", scenario, "--out", str(out), "--html", "--plots", "--quiet"]) == 0
+    html = (out / "scene.html").read_text()
+    assert html.startswith("<!DOCTYPE html>") and len(html) < 5_000_000
+    assert (out / "tracking_error.png").is_file() and (out / "obstacle_distance.png").is_file()
+
+
+def test_show_serves_on_loopback(capsys):
+    from clik.viz import stop_server
+
+    try:
+        assert main(["show", str(scenario_path("case_study_both")), "--no-block"]) == 0
+        assert "http://127.0.0.1:" in capsys.readouterr().out
+    finally:
+        stop_server()
