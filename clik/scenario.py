@@ -251,6 +251,7 @@ def _constraints(ct: Table) -> dict[str, Any]:
     sc.done()
     out["release"] = ct.string("release", "projection", ("projection", "sign"))
     out["hysteresis"] = ct.number("hysteresis", 0.0, minimum=0.0)
+    out["max_active"] = ct.number("max_active", None, minimum=0, integer=True)
     ct.done()
     return out
 

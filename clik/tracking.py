@@ -237,10 +237,7 @@ class Tracker:
                     reason = f"non-finite joint velocity or task error at t = {t[k]:.6g} s"
                 elif jump > max_joint_step:
                     status, stop = "diverged", True
-                    reason = (
-                        f"a joint moved {jump:.3g} rad in one step at t = {t[k]:.6g} s: the "
-                        "gain is too high for dt (alpha dt lambda_max(J J^T) >= 2?)"
-                    )
+                    reason = self._divergence_reason(t[k], jump, r)
                 elif err > deadlock_error and self._deadlocked(r, deadlock_ratio):
                     stuck += check_every
                     if stuck >= window:
@@ -349,6 +346,17 @@ class Tracker:
         force = float(np.linalg.norm(J.T @ Ke))
         scale = float(np.linalg.norm(J)) * float(np.linalg.norm(Ke))
         return scale > 0.0 and force <= ratio * scale
+
+    def _divergence_reason(self, t: float, jump: float, r: int) -> str:
+        m = self.task.m
+        head = f"a joint moved {jump:.3g} rad in one step at t = {t:.6g} s: "
+        if r == m or self.constraints is None:
+            return head + "the gain is too high for dt (alpha dt lambda_max(J J^T) >= 2?)"
+        names = ", ".join(self.constraints.active_names())
+        return head + (
+            f"with {r - m} active constraint row(s) ({names}) the extended Jacobian J_e is "
+            "near-singular (conflicting constraints) or the gain too high for dt"
+        )
 
     def _deadlock_reason(self, t: float, err: float, r: int) -> str:
         active = self.constraints.active_names() if self.constraints is not None else []

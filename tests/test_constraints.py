@@ -17,6 +17,17 @@ from clik.runner import build
 from clik.trajectory import Line
 
 FD = 1e-6
+PANDA_FINGER_STL = str(
+    next(
+        iter(
+            sorted(
+                clik.Robot.load("panda").source_path.parent.parent.glob(
+                    "meshes/collision/finger.stl"
+                )
+            )
+        )
+    )
+)
 
 
 def pair_error_and_row(robot, scene, q, link, o, form, thr, t=0.0):
@@ -60,6 +71,14 @@ def obstacles_near(robot, q, link_index, mesh_dir, scene_links=None):
         Obstacle("box", "box", away, rpy=[0.3, 0.2, 0.1], size=[0.02, 0.03, 0.04]),
         Obstacle("capsule", "capsule", away, rpy=[0.5, 0.0, 0.0], radius=0.01, length=0.03),
         Obstacle("mesh", "mesh", away + [0.03, 0.03, 0.0], rpy=[0.2, 0.4, 0.0], file=mesh),
+        # a real collision mesh (its convex hull) against the link's hull: GJK on both sides
+        Obstacle(
+            "link_mesh",
+            "mesh",
+            away + [0.1, 0.1, 0.0],
+            file=PANDA_FINGER_STL,
+            scale=[0.3, 0.3, 0.3],
+        ),
     ]
 
 
@@ -225,15 +244,10 @@ def test_panda_sphere_avoided(panda, panda_line):
         assert result.extra["obstacle_distance"].shape == (3001, 1)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 3 open: with self-collision rows the fold "
-    "toward the base diverges (rows of links 0-3 against the fingers conflict)",
-)
 def test_panda_self_collision(panda):
     task = clik.Task(panda, "panda_hand", "position")
     p0 = task.placement(panda.q_reference).translation
-    fold = Line(p0, [0.05, 0.0, 0.35], duration=3.0)  # pulls the hand in, toward the arm
+    fold = Line(p0, [0.1, 0.0, 0.38], duration=3.0)  # folds the fingers into links 1-2
     monitor = ConstraintSet(
         panda, self_collision=True, obstacle_rows=False, max_active=0, self_threshold=0.01
     )
@@ -243,8 +257,10 @@ def test_panda_self_collision(panda):
     guarded = clik.Tracker(task, law="pseudoinverse", constraints=rows).run(fold)
     free_min = self_min_distance(panda, rows.scene, free.q)
     guarded_min = self_min_distance(panda, rows.scene, guarded.q)
-    assert free_min < 0.01 - 0.002
+    assert free_min < 0.0  # unconstrained, the fingers go into the arm
+    assert guarded.status == "completed" and guarded.max_task_error < 1e-4
     assert guarded_min >= 0.01 - 0.002
+    assert any(e["constraint"].startswith("self:") for e in guarded.events)
 
 
 def self_min_distance(robot, scene, qs):
@@ -282,3 +298,68 @@ def test_summary_contract_for_obstacles(tmp_path):
     with np.load(out / "trajectory.npz") as npz:
         assert npz["min_obstacle_distance"].shape == (3001,)
         assert npz["min_obstacle_distance"].min() == pytest.approx(summary["min_obstacle_distance"])
+
+
+@pytest.mark.parametrize("form", ["normalized", "squared"])
+def test_penetration_still_pushes_out(planar4r, form):
+    q = np.radians([180, -30, -90, -30])
+    pin.framesForwardKinematics(planar4r.model, planar4r.data, q)
+    a = planar4r.data.oMi[4].translation.copy()
+    tip = planar4r.data.oMf[planar4r.frame_id("tip")].translation.copy()
+    center = 0.5 * (a + tip) + np.array([0.004, 0.0, 0.0])  # 4 mm off link 4's axis
+    scene = CollisionScene(planar4r, [Obstacle("ball", "sphere", center, radius=0.01)])
+    e, row, _, dist = pair_error_and_row(planar4r, scene, q, 3, 0, form, 0.03)
+    assert dist < 0.0  # the link is inside the ball
+    # following the row (qdot = K j^T e, e > 0) lowers the error: the link moves out
+    step = 1e-4 * row / np.linalg.norm(row)
+    assert pair_error_and_row(planar4r, scene, q + step, 3, 0, form, 0.03)[0] < e
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        dq = rng.normal(size=4)
+        e_plus = pair_error_and_row(planar4r, scene, q + FD * dq, 3, 0, form, 0.03)[0]
+        e_minus = pair_error_and_row(planar4r, scene, q - FD * dq, 3, 0, form, 0.03)[0]
+        assert (e_plus - e_minus) / (2 * FD) == pytest.approx(-row @ dq, rel=1e-4, abs=1e-7)
+
+
+def test_more_candidates_than_rows_are_skipped_and_logged(tmp_path):
+    text = scenario_path("case_study_both_pinv").read_text()
+    text = text.replace(
+        "[constraints.obstacles]", "[constraints]\nmax_active = 1\n\n[constraints.obstacles]"
+    )
+    path = tmp_path / "one_row.toml"
+    path.write_text(text)
+    result = build(path).execute()  # one row only: the obstacle must wait for joint 3
+    skipped = [e for e in result.events if e["action"] == "skipped"]
+    assert skipped and skipped[0]["constraint"] == "obstacle:pin:link4"
+    assert result.extra["active"].shape[1] == 1
+
+
+def test_sign_rule_hysteresis_reduces_switching():
+    counts = []
+    for hysteresis in (0.0, 0.2):
+        run = build(scenario_path("case_study_both_pinv"))
+        run.tracker.constraints.release_rule = "sign"
+        run.tracker.constraints.hysteresis = hysteresis
+        counts.append(len(run.execute().events))
+    assert counts[1] < counts[0]
+
+
+def test_obstacles_move_and_change_between_runs(planar4r):
+    task = clik.Task(planar4r, "tip", "position", axes=["x", "y"])
+    q0 = np.radians([180, -30, -90, -30])
+    line = Line(task.placement(q0).translation, [0.8, -0.2, 0.0], duration=3.0, cruise_speed=0.12)
+    cs = ConstraintSet(planar4r, obstacles=[Obstacle("pin", "sphere", [0.7, -0.28, 0], radius=0)])
+    tracker = clik.Tracker(task, law="pseudoinverse", constraints=cs)
+    near = tracker.run(line, q0).summary()["min_obstacle_distance"]
+    cs.move_obstacle("pin", [0.7, -0.5, 0.0])
+    far = tracker.run(line, q0).summary()["min_obstacle_distance"]
+    assert far > near + 0.1
+    cs.set_obstacles(
+        [
+            Obstacle("a", "sphere", [0.7, -0.28, 0], radius=0),
+            Obstacle("b", "box", [0.3, 0.5, 0.0], size=[0.1, 0.1, 0.1]),
+        ]
+    )
+    both = tracker.run(line, q0).summary()
+    assert set(both["min_obstacle_distance_by_obstacle"]) == {"a", "b"}
+    assert both["min_obstacle_distance_by_obstacle"]["a"] == pytest.approx(near, abs=1e-4)

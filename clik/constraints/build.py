@@ -65,6 +65,7 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
             self_gain=sc["gain"],
             release=release,
             hysteresis=c["hysteresis"],
+            max_active=c["max_active"],
         )
     except ClikError as exc:
         raise ScenarioError(scenario.file, "constraints", str(exc)) from None

@@ -26,6 +26,9 @@ import pinocchio as pin
 from clik.constraints.obstacle import Obstacle, convex_hull
 from clik.errors import GeometryError, InputError
 
+GJK_TOLERANCE = 1e-9
+"""Tolerance of coal's GJK/EPA for link-obstacle and link-link distances [m]."""
+
 
 class NoCollisionGeometryWarning(UserWarning):
     """Some links have no collision geometry: they cannot be kept away from obstacles."""
@@ -137,6 +140,11 @@ class CollisionScene:
             self._add_self_pairs(gmodel, robot, self_margin)
         self.gmodel = gmodel
         self.gdata = pin.GeometryData(gmodel)
+        for request in self.gdata.distanceRequests:
+            # GJK's default 1e-6 m tolerance makes hull-hull witness points jitter by that
+            # much between samples; rows are derivatives, so ask for 1e-9 m.
+            request.gjk_tolerance = GJK_TOLERANCE
+            request.epa_tolerance = GJK_TOLERANCE
         self._joint_pos = np.zeros((len(self.joints), 3))
 
     def _add_self_pairs(self, gmodel: pin.GeometryModel, robot: object, margin: float) -> None:

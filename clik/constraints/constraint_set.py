@@ -27,6 +27,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import pinocchio as pin
 
 from clik.constraints.collision_scene import CollisionScene
 from clik.constraints.joint_limits import JointLimits
@@ -127,9 +128,6 @@ class ConstraintSet:
             raise InputError("constraints.hysteresis", "a number >= 0", hysteresis)
         self.robot = robot
         self.obstacles = list(obstacles)
-        names = [o.name for o in self.obstacles]
-        if len(set(names)) != len(names):
-            raise InputError("obstacles", "distinct obstacle names", names)
         self.obstacle_rows = obstacle_rows
         self.obstacle_threshold = float(obstacle_threshold)
         self.gains = {"obstacle": obstacle_gain, "joint": joint_gain, "self": self_gain}
@@ -140,14 +138,63 @@ class ConstraintSet:
         self.hysteresis = float(hysteresis)
         self.max_active = max_active
         self.monitor_margin = float(monitor_margin)
-        need_scene = bool(self.obstacles) or self_collision
-        self.scene = (
-            CollisionScene(robot, self.obstacles, links, self_collision) if need_scene else None
-        )
+        self._links = links
+        self._self_collision = self_collision
         self.max_rows = robot.nv  # type: ignore[attr-defined]
         self.min_distance = math.inf
         self.events: list[dict[str, Any]] = []
+        self.set_obstacles(self.obstacles)
+
+    # -- obstacles between runs ----------------------------------------------------------
+
+    def set_obstacles(self, obstacles: Sequence[Obstacle]) -> None:
+        """Replace the obstacles (add, remove) between runs, keeping the robot as loaded.
+
+        The link hulls are computed once per robot; only the collision pairs are rebuilt.
+        """
+        obstacles = list(obstacles)
+        names = [o.name for o in obstacles]
+        if len(set(names)) != len(names):
+            raise InputError("obstacles", "distinct obstacle names", names)
+        self.obstacles = obstacles
+        need_scene = bool(obstacles) or self._self_collision
+        self.scene = (
+            CollisionScene(self.robot, obstacles, self._links, self._self_collision)
+            if need_scene
+            else None
+        )
         self._setup_scene()
+
+    def move_obstacle(
+        self,
+        name: str,
+        position: Sequence[float] | np.ndarray,
+        rpy: Sequence[float] | None = None,
+        velocity: Sequence[float] | None = None,
+    ) -> None:
+        """Move an obstacle between runs (no rebuild): new position [m], rpy [rad], velocity."""
+        names = [o.name for o in self.obstacles]
+        if name not in names:
+            raise InputError("obstacle", f"one of {names}", name)
+        i = names.index(name)
+        ob = self.obstacles[i]
+        moved = Obstacle.__new__(Obstacle)
+        moved.__dict__.update(ob.__dict__)
+        moved.position = np.array(position, dtype=float)
+        if moved.position.shape != (3,) or not np.all(np.isfinite(moved.position)):
+            raise InputError(f"obstacles.{name}.position", "three finite numbers", position)
+        if rpy is not None:
+            moved.rpy = np.array(rpy, dtype=float)
+            moved.rotation = pin.rpy.rpyToMatrix(*moved.rpy)
+        if velocity is not None:
+            moved.velocity = np.array(velocity, dtype=float)
+        self.obstacles[i] = moved
+        assert self.scene is not None
+        self.scene.obstacles[i] = moved
+        self.scene.gmodel.geometryObjects[self.scene.obstacle_geom[i]].placement = moved.placement()
+        self.obs_pos0[i] = moved.position
+        self.obs_vel[i] = moved.velocity
+        self._moving = bool(np.any(self.obs_vel != 0.0))
 
     # -- set-up ------------------------------------------------------------------------
 
