@@ -140,6 +140,11 @@ class CollisionScene:
             self._add_self_pairs(gmodel, robot, self_margin)
         self.gmodel = gmodel
         self.gdata = pin.GeometryData(gmodel)
+        self._moving = [o for o, ob in enumerate(self.obstacles) if ob.moving]
+        n_obs = len(self.obstacles)
+        self._diff = np.zeros((len(self.joints), n_obs, 3))
+        self._gap = np.zeros((len(self.joints), n_obs))
+        self._radii = self.joint_radius[:, None] + self.obstacle_radius[None, :]
         for request in self.gdata.distanceRequests:
             # GJK's default 1e-6 m tolerance makes hull-hull witness points jitter by that
             # much between samples; rows are derivatives, so ask for 1e-9 m.
@@ -176,23 +181,36 @@ class CollisionScene:
 
     # -- per step ----------------------------------------------------------------------
 
-    def update(self, data: pin.Data, t: float) -> None:
-        """Place every geometry at the current kinematics (``data.oMi``) and time ``t`` [s]."""
-        for ob, g in zip(self.obstacles, self.obstacle_geom, strict=True):
-            if ob.moving:
-                self.gmodel.geometryObjects[g].placement = ob.placement(t)
-        pin.updateGeometryPlacements(self.model, data, self.gmodel, self.gdata)
+    def place_joints(self, data: pin.Data) -> np.ndarray:
+        """Joint origins (n_joints, 3) [m] from ``data.oMi``: bounding-sphere centres."""
         pos = self._joint_pos
         oMi = data.oMi
         for s, j in enumerate(self.joints):
             pos[s] = oMi[j].translation
+        return pos
+
+    def place_geometries(self, data: pin.Data, t: float) -> None:
+        """Place every geometry (one C++ call) and the moving obstacles at time ``t`` [s]."""
+        for o in self._moving:
+            g = self.obstacle_geom[o]
+            self.gmodel.geometryObjects[g].placement = self.obstacles[o].placement(t)
+        pin.updateGeometryPlacements(self.model, data, self.gmodel, self.gdata)
+
+    def update(self, data: pin.Data, t: float) -> None:
+        """Joint origins and every geometry at the current kinematics and time ``t`` [s]."""
+        self.place_joints(data)
+        self.place_geometries(data, t)
 
     def obstacle_lower_bounds(self, centers: np.ndarray) -> np.ndarray:
-        """Bounding-sphere lower bounds of the joint-obstacle distances (n_joints, n_obs) [m]."""
-        diff = self._joint_pos[:, None, :] - centers[None, :, :]
-        gap = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
-        gap -= self.joint_radius[:, None]
-        gap -= self.obstacle_radius[None, :]
+        """Bounding-sphere lower bounds of the joint-obstacle distances (n_joints, n_obs) [m].
+
+        Uses the joint origins of the last :meth:`place_joints`; writes into a buffer.
+        """
+        diff, gap = self._diff, self._gap
+        np.subtract(self._joint_pos[:, None, :], centers[None, :, :], out=diff)
+        np.einsum("ijk,ijk->ij", diff, diff, out=gap)
+        np.sqrt(gap, out=gap)
+        gap -= self._radii
         return gap
 
     def distance(self, pair: int) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:

@@ -228,6 +228,11 @@ class ConstraintSet:
             sp = np.array([(a, b) for _, a, b in scene.self_pairs])
             self.self_slots = (scene.link_slot[sp[:, 0]], scene.link_slot[sp[:, 1]])
         self._obs_rmin = np.full(n_obs, np.inf)
+        self._cutoff = np.broadcast_to(
+            self.obs_threshold + self.monitor_margin, (len(scene.joints), n_obs)
+        ).copy()
+        self._near = np.zeros((len(scene.joints), n_obs), dtype=bool)
+        self._better = np.zeros(n_obs, dtype=bool)
 
     def bind(self, tracker: Tracker) -> None:
         """Attach to a tracker (called by :class:`~clik.tracking.Tracker`)."""
@@ -328,7 +333,8 @@ class ConstraintSet:
         scene = self.scene
         assert scene is not None
         data = self.robot.data  # type: ignore[attr-defined]
-        scene.update(data, tk)
+        scene.place_joints(data)
+        placed = False
         self.min_distance = math.inf
         if self.obstacles:
             centers = self.obs_pos0 + tk * self.obs_vel if self._moving else self.obs_pos0
@@ -336,8 +342,11 @@ class ConstraintSet:
             dist_o, link_o = self._dist_o, self._link_o
             np.min(lb, axis=0, out=dist_o)
             link_o[:] = -1
-            near = np.argwhere(lb < (self.obs_threshold + self.monitor_margin)[None, :])
-            for slot, o in near:
+            near = np.less(lb, self._cutoff, out=self._near)
+            if near.any():
+                scene.place_geometries(data, tk)
+                placed = True
+            for slot, o in np.argwhere(near) if placed else ():
                 thr = float(self.obs_threshold[o])
                 for i in self.slot_links[slot]:
                     pair = int(scene.obstacle_pairs[i, o])
@@ -366,7 +375,7 @@ class ConstraintSet:
                             )
                         )
             self.min_distance = float(dist_o.min())
-            better = dist_o < self.run_min
+            better = np.less(dist_o, self.run_min, out=self._better)
             if better.any():
                 for o in np.flatnonzero(better):
                     self.run_min[o] = dist_o[o]
@@ -376,7 +385,10 @@ class ConstraintSet:
             pos, r = scene._joint_pos, scene.joint_radius
             a, b = self.self_slots
             gap = np.linalg.norm(pos[a] - pos[b], axis=1) - r[a] - r[b]
-            for idx in np.flatnonzero(gap < self.self_threshold + self.monitor_margin):
+            close = np.flatnonzero(gap < self.self_threshold + self.monitor_margin)
+            if close.size and not placed:
+                scene.place_geometries(data, tk)
+            for idx in close:
                 pair, ia, ib = scene.self_pairs[idx]
                 dist, pa, pb, normal = scene.distance(pair)
                 key = f"self:{self.link_labels[ia]}:{self.link_labels[ib]}"
