@@ -1,4 +1,4 @@
-"""The ``clik`` command line: ``solve``, ``demo``, ``robots``, ``show``.
+"""The ``clik`` command line: solve, demo, show, robots, sweep, reach and bench.
 
 Errors are printed without a traceback (``--debug`` shows it) and the exit
 code tells the kind: 0 success, 2 bad input, 3 infeasible (the run stopped
@@ -13,7 +13,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from clik.errors import EXIT_CODES, ClikError, OutputExistsError
+from clik.errors import EXIT_CODES, ClikError, InputError, OutputExistsError
 from clik.result import TrackingResult, write_json
 
 INFEASIBLE_STATUSES = ("deadlock", "diverged")
@@ -21,7 +21,9 @@ INFEASIBLE_STATUSES = ("deadlock", "diverged")
 
 def prepare_out(out: Path, force: bool) -> Path:
     """Create the output folder; an existing non-empty one needs ``force``."""
-    if out.exists() and (not out.is_dir() or any(out.iterdir())) and not force:
+    if out.exists() and not out.is_dir():
+        raise InputError("--out", "a folder (this is an existing file)", str(out))
+    if out.exists() and any(out.iterdir()) and not force:
         raise OutputExistsError(out)
     out.mkdir(parents=True, exist_ok=True)
     return out
@@ -52,8 +54,8 @@ class ProgressBar:
 def write_outputs(result: TrackingResult, out: Path) -> dict:
     """Write ``summary.json`` and ``trajectory.npz`` into ``out``; returns the summary."""
     summary = result.summary()
-    write_json(out / "summary.json", summary)
     result.save(out / "trajectory.npz")
+    write_json(out / "summary.json", summary)  # last: it exists only once both are complete
     return summary
 
 
@@ -116,11 +118,101 @@ def cmd_show(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench(args: argparse.Namespace) -> int:
+    from clik.bench import run_bench
+
+    run_bench(Path(args.out), quick=args.quick, log=None if args.quiet else print)
+    return 0
+
+
 def cmd_robots(args: argparse.Namespace) -> int:
     from clik.robot import Robot
 
     for name, where in Robot.available().items():
         print(f"{name:32s} {where}")
+    return 0
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from clik.sweep.execute import run_sweep
+    from clik.sweep.spec import load_sweep
+
+    sweep = load_sweep(args.sweep)
+    try:
+        report = run_sweep(
+            sweep,
+            Path(args.out),
+            workers=args.workers,
+            scheduler=args.scheduler,
+            keep_trajectories=args.keep_trajectories,
+            force=args.force,
+            fmt=args.format,
+            progress=False if args.quiet else None,
+        )
+    except KeyboardInterrupt:
+        print(
+            f"clik sweep: stopped; the finished runs are in {args.out}: run the same command "
+            "again to compute the others",
+            file=sys.stderr,
+        )
+        raise
+    if not args.quiet:
+        counts = ", ".join(f"{n} {s}" for s, n in sorted(report.statuses.items())) or "nothing"
+        print(
+            f"{sweep.name}: {report.total} runs, {report.skipped} already in {args.out}, "
+            f"{report.computed} computed ({counts}) in {report.wall_time_s:.1f} s "
+            f"({report.rate:.2f} runs/s)"
+        )
+        if report.lost:
+            print(f"  {report.lost} runs were cancelled by the cluster: rerun to compute them")
+        print(f"  wrote {report.results}")
+    return 0
+
+
+def _lock_item(text: str) -> tuple[str, float]:
+    """``JOINT=VALUE`` of ``clik reach --lock``."""
+    name, sep, value = text.partition("=")
+    try:
+        if not sep or not name:
+            raise ValueError
+        return name, float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected JOINT=VALUE, got {text!r}") from None
+
+
+def cmd_reach(args: argparse.Namespace) -> int:
+    import math
+
+    from clik.sweep.reach import ReachSpec, check_spec, reach_map, write_reach
+
+    spec = ReachSpec(
+        robot=args.robot,
+        frame=args.frame,
+        box=tuple(args.box),
+        step=args.step,
+        orientation_rpy=None
+        if args.orientation is None
+        else tuple(math.radians(v) for v in args.orientation),
+        lock=dict(args.lock or []),
+        axes=tuple(args.axes) if args.axes else None,
+        restarts=args.restarts,
+    )
+    check_spec(spec)
+    out = prepare_out(Path(args.out), args.force)
+    reach = reach_map(
+        spec,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        progress=False if args.quiet else None,
+    )
+    written = write_reach(reach, out, html=not args.no_html)
+    if not args.quiet:
+        print(
+            f"reach {args.robot} {args.frame}: {int(reach.success.sum())}/{len(reach.points)} "
+            f"points reachable ({100 * reach.reachable_fraction:.1f} %) "
+            f"in {reach.wall_time_s:.1f} s"
+        )
+        print("  wrote " + ", ".join(str(p) for p in written.values()))
     return 0
 
 
@@ -155,6 +247,66 @@ def parser() -> argparse.ArgumentParser:
 
     r = sub.add_parser("robots", help="list the robots known by name")
     r.set_defaults(func=cmd_robots)
+
+    b = sub.add_parser("bench", help="run the benchmark suite (writes bench.json, bench.md)")
+    b.add_argument("--out", default="out/bench", help="output folder")
+    b.add_argument("--quick", action="store_true", help="a smoke run of a few seconds")
+    b.add_argument("--quiet", action="store_true")
+    b.set_defaults(func=cmd_bench)
+
+    w = sub.add_parser("sweep", help="run a sweep file (many scenarios) on Dask")
+    w.add_argument("sweep", type=Path, help="the sweep file (TOML)")
+    w.add_argument("--out", required=True, help="output folder (rerun to resume)")
+    where = w.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, help="local worker processes (default: one per CPU)")
+    where.add_argument("--scheduler", help="an existing Dask scheduler, tcp://HOST:PORT")
+    w.add_argument(
+        "--keep-trajectories", action="store_true", help="also write DIR/runs/<id>/ per run"
+    )
+    w.add_argument("--force", action="store_true", help="start over in a folder holding others")
+    w.add_argument(
+        "--format", choices=("auto", "parquet", "csv"), default="auto", help="results table"
+    )
+    w.add_argument("--quiet", action="store_true")
+    w.set_defaults(func=cmd_sweep)
+
+    a = sub.add_parser("reach", help="reachability map: single-pose IK over a grid of points")
+    a.add_argument("robot", help="robot name or URDF path")
+    a.add_argument("--frame", required=True, help="the frame to place")
+    a.add_argument(
+        "--box",
+        nargs=6,
+        type=float,
+        required=True,
+        metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
+        help="the box of target points [m]",
+    )
+    a.add_argument("--step", type=float, required=True, help="grid spacing [m]")
+    a.add_argument(
+        "--orientation",
+        nargs=3,
+        type=float,
+        metavar=("ROLL", "PITCH", "YAW"),
+        help="fixed orientation [deg] (a pose task; default: a position task)",
+    )
+    a.add_argument(
+        "--lock",
+        nargs="+",
+        action="extend",
+        type=_lock_item,
+        metavar="JOINT=VALUE",
+        help="lock joints, values in the joint's unit [rad or m]",
+    )
+    a.add_argument("--axes", nargs="+", help="task components kept, e.g. x y (planar arm)")
+    a.add_argument("--restarts", type=int, default=20, help="random restarts per point")
+    a.add_argument("--out", required=True, help="output folder")
+    where = a.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, help="local worker processes (default: one per CPU)")
+    where.add_argument("--scheduler", help="an existing Dask scheduler, tcp://HOST:PORT")
+    a.add_argument("--force", action="store_true", help="write into an existing output folder")
+    a.add_argument("--no-html", action="store_true", help="skip DIR/reach.html")
+    a.add_argument("--quiet", action="store_true")
+    a.set_defaults(func=cmd_reach)
 
     return p
 

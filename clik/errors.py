@@ -140,9 +140,31 @@ class GeometryError(ClikError, ValueError):
 
 
 class InfeasibleError(ClikError):
-    """A request that is well-formed but cannot be met (e.g. an impossible start)."""
+    """A request that is well-formed but cannot be met (e.g. an impossible start).
+
+    Attributes:
+        field: The input that cannot be met (a parameter or a key path).
+        problem: Why, in words.
+    """
 
     exit_code = 3
+
+    def __init__(self, field: str, problem: str) -> None:
+        self.field = field
+        self.problem = problem
+        super().__init__(f"{field}: {problem}")
+
+
+def native_message(error: BaseException) -> str:
+    """The useful part of an error raised by Pinocchio's or coal's C++ code.
+
+    Their messages start with the C++ file, function and line ("From file: ...
+    at line: 91 message: ..."); keep what follows ``message:``, on one line.
+    """
+    text = str(error)
+    if "message:" in text:
+        text = text.split("message:", 1)[1]
+    return " ".join(text.split())
 
 
 EXIT_CODES = {"bad_input": 2, "infeasible": 3, "internal": 4}

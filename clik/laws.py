@@ -15,6 +15,7 @@ rows appended, ``J`` is ``J_e`` of eq. (24) and ``e`` is ``e_e`` of eq. (25).
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 import numpy as np
@@ -51,7 +52,7 @@ def transpose(
         work: Scratch array (r,).
     """
     np.multiply(K, e, out=work)
-    return np.dot(J.T, work, out=out)
+    return J.T.dot(work, out=out)
 
 
 def nonlinear(
@@ -108,11 +109,32 @@ def pseudoinverse(
     """
     np.multiply(K, e, out=work)
     work += xdot_d
-    A = J @ J.T
+    A = J.dot(J.T)
     if damping > 0.0:
         A.flat[:: A.shape[0] + 1] += damping * damping
-    try:
-        y = np.linalg.solve(A, work)
-    except np.linalg.LinAlgError:
-        y = np.linalg.pinv(A) @ work
-    return np.dot(J.T, y, out=out)
+    return J.T.dot(solve_small(A, work), out=out)
+
+
+def solve_small(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``A^-1 b`` for a small square ``A``; the SVD pseudoinverse when ``A`` is singular.
+
+    Calls LAPACK's ``gesv`` through numpy's gufunc directly: ``np.linalg.solve``'s
+    Python-side checks cost three times the solve itself for a 6x6 system.
+    """
+    y = _solve1(A, b)  # hot loops run under np.errstate(invalid="ignore")
+    if math.isfinite(y.dot(y)):
+        return y
+    return np.linalg.pinv(A).dot(b)  # singular A: gesv gave NaN
+
+
+def _numpy_solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.linalg.solve(A, b)
+
+
+try:  # numpy's private gufunc: checked once here, with a public fallback
+    from numpy.linalg import _umath_linalg
+
+    _solve1 = _umath_linalg.solve1
+    _solve1(np.eye(2), np.ones(2))
+except (ImportError, AttributeError, TypeError):  # pragma: no cover - other numpy builds
+    _solve1 = _numpy_solve

@@ -152,16 +152,32 @@ class TrackingResult:
         )
 
 
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+_FILE_MODE = 0o666 & ~_umask()
+"""Permissions of a written file: what ``open`` would give (``mkstemp`` gives 0600)."""
+
+
 def atomic_write(path: Path, write: Any, mode: str = "wb") -> None:
     """Write ``path`` through ``write(file)`` into a temporary file, then rename it.
 
-    A run killed midway leaves either the old file or none, never a truncated one.
+    The temporary file sits in the same folder (a hidden ``.<name>.*.tmp``), is
+    flushed to disk, then renamed over ``path``: a run killed midway leaves
+    either the old file or none, never a truncated one. On an exception the
+    temporary file is removed and ``path`` is untouched.
     """
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, mode) as f:
             write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.chmod(tmp, _FILE_MODE)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -9,6 +9,7 @@ The visual model is built on first use: meshes for display are slow to read
 
 from __future__ import annotations
 
+import hashlib
 import importlib.resources
 import math
 from collections.abc import Mapping, Sequence
@@ -20,10 +21,12 @@ import pinocchio as pin
 
 from clik.errors import (
     FrameNotFound,
+    InfeasibleError,
     InputError,
     JointNotFound,
     RobotLoadError,
     UnknownRobotError,
+    native_message,
 )
 from clik.urdf_check import check_urdf, parse_xml
 
@@ -68,6 +71,7 @@ class Robot:
         self._q_reference = self.check_configuration(q_reference, "q_reference")
         self._visual_model = visual_model
         self._reduction: tuple[pin.Model, list[int], np.ndarray] | None = None
+        self._source_digest: str | None = None  # of the file as checked, see visual_model
 
     # ------------------------------------------------------------------ loading
 
@@ -89,8 +93,8 @@ class Robot:
         Args:
             source: A URDF path (relative to the working folder) or a robot name.
             package_dirs: Folders holding the packages of ``package://`` meshes;
-                default: the URDF's folder and its two parents (example-robot-data
-                robots: the loader's own folder).
+                default: the URDF's folder and its two parents, never the
+                filesystem root (example-robot-data robots: the loader's own folder).
             lock: Joints to lock, with their value [rad or m], e.g.
                 ``{"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}``;
                 the models are reduced to the other joints.
@@ -109,7 +113,7 @@ class Robot:
         if Path(source).is_file() or Path(source).suffix == ".urdf" or "/" in source_str:
             urdf = Path(source)
             name = urdf.stem
-            default_dirs = [urdf.parent, urdf.parent.parent, urdf.parent.parent.parent]
+            default_dirs = _parent_dirs(urdf)
         elif source_str in _our_robots():
             urdf, name = _our_robots()[source_str], source_str
             default_dirs = [urdf.parent]
@@ -121,14 +125,17 @@ class Robot:
         dirs = [str(d) for d in (default_dirs if package_dirs is None else package_dirs)]
 
         check_urdf(urdf, dirs)
+        digest = _digest(urdf)
         try:
             model, collision_model = pin.buildModelsFromUrdf(
                 str(urdf), package_dirs=dirs, geometry_types=[pin.COLLISION]
             )
         except (ValueError, RuntimeError) as error:
-            raise RobotLoadError(urdf, f"Pinocchio cannot build the model: {error}") from None
+            problem = f"Pinocchio cannot build the model: {native_message(error)}"
+            raise RobotLoadError(urdf, problem) from None
         q_reference = _reference_configuration(model, srdf, posture)
         robot = cls(name, urdf.resolve(), dirs, model, collision_model, q_reference)
+        robot._source_digest = digest
         return robot._locked(lock) if lock else robot
 
     def _locked(self, lock: Mapping[str, float]) -> Robot:
@@ -162,6 +169,7 @@ class Robot:
             self.name, self.source_path, self.package_dirs, model, collision_model, q_reference
         )
         robot._reduction = (self.model, sorted(joint_ids), q_full)
+        robot._source_digest = self._source_digest
         return robot
 
     @staticmethod
@@ -178,14 +186,30 @@ class Robot:
     def visual_model(self) -> pin.GeometryModel:
         """Visual geometry, read from the URDF on first use (slow for meshes).
 
-        Empty when the robot has no source file.
+        Empty when the robot has no source file. The file is read again only if
+        it is still the one checked by :meth:`load`.
+
+        Raises:
+            RobotLoadError: The URDF was removed or changed since the robot was
+                loaded, or its visual meshes cannot be read.
         """
         if self._visual_model is None and self.source_path is None:
             self._visual_model = pin.GeometryModel()
         if self._visual_model is None:
-            visual = pin.buildGeomFromUrdf(
-                self._full_model, str(self.source_path), pin.VISUAL, package_dirs=self.package_dirs
-            )
+            path = self.source_path
+            if self._source_digest is not None and _digest(path) != self._source_digest:
+                raise RobotLoadError(
+                    path,
+                    "the file was removed or changed since the robot was loaded "
+                    "(its visual geometry is read on first use); load the robot again",
+                )
+            try:
+                visual = pin.buildGeomFromUrdf(
+                    self._full_model, str(path), pin.VISUAL, package_dirs=self.package_dirs
+                )
+            except (ValueError, RuntimeError) as error:
+                problem = f"Pinocchio cannot read the visual geometry: {native_message(error)}"
+                raise RobotLoadError(path, problem) from None
             if self._reduction is not None:
                 full_model, joint_ids, q_full = self._reduction
                 _, visual = pin.buildReducedModel(full_model, visual, joint_ids, q_full)
@@ -311,6 +335,46 @@ class Robot:
             raise InputError(field, expected, got=got)
         return array
 
+    def check_within_limits(
+        self, q: np.ndarray, field: str = "q0", tolerance: float = 1e-9
+    ) -> None:
+        """Check that a configuration lies inside the model's joint limits.
+
+        A start outside the robot's own (URDF) limits is a configuration the
+        robot cannot be in: clik refuses it rather than guess a recovery.
+        Continuous joints (no limits) and joints with infinite limits are not
+        checked. Stricter limits given to a joint-range constraint are not the
+        model's: a start beyond them (but inside the model's) is driven back by
+        the constraint's row, active from the first sample.
+
+        Args:
+            q: A configuration, shape (nq,), as returned by :meth:`check_configuration`.
+            field: Name of the input, used in the error message.
+            tolerance: Accepted excess beyond a limit [rad or m] (rounding, e.g.
+                of a limit given in degrees).
+
+        Raises:
+            InfeasibleError: A joint is beyond one of its limits by more than
+                ``tolerance``; the message names every such joint, its value and
+                its limits.
+        """
+        outside = []
+        for name, joint in zip(self.joint_names, self.model.joints[1:], strict=True):
+            if joint.nq != 1 or joint.nv != 1:
+                continue  # continuous (cos, sin), spherical, free: no position limits
+            i = joint.idx_q
+            low = self.model.lowerPositionLimit[i]
+            high = self.model.upperPositionLimit[i]
+            value = float(q[i])
+            if value < low - tolerance or value > high + tolerance:
+                outside.append(f"{name!r} = {value:.6g} not in [{low:.6g}, {high:.6g}]")
+        if outside:
+            raise InfeasibleError(
+                field,
+                f"the configuration is outside the joint limits of {self.name} "
+                f"[rad or m]: {'; '.join(outside)}",
+            )
+
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, nq={self.nq}, nv={self.nv})"
 
@@ -318,6 +382,26 @@ class Robot:
 def _q_slice(model: pin.Model, joint_id: int) -> slice:
     joint = model.joints[joint_id]
     return slice(joint.idx_q, joint.idx_q + joint.nq)
+
+
+def _digest(path: Path) -> str | None:
+    """SHA-256 of a file's bytes, or None when it cannot be read."""
+    try:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return None
+
+
+def _parent_dirs(urdf: Path) -> list[Path]:
+    """The URDF's folder and its two parents, without the filesystem root.
+
+    A ``package://pkg/...`` URI is looked up as ``<dir>/pkg/...``: with the root
+    among the folders, a URDF in a shallow folder could name any system file.
+    """
+    folders = [urdf.parent, urdf.parent.parent, urdf.parent.parent.parent]
+    absolute = [folder.absolute() for folder in folders]
+    kept = [f for f, a in zip(folders, absolute, strict=True) if a.parent != a]
+    return list(dict.fromkeys(kept)) or [urdf.parent]
 
 
 def _reference_configuration(

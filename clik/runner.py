@@ -14,7 +14,14 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from clik.errors import ClikError, FrameNotFound, InputError, JointNotFound, ScenarioError
+from clik.errors import (
+    ClikError,
+    FrameNotFound,
+    InfeasibleError,
+    InputError,
+    JointNotFound,
+    ScenarioError,
+)
 from clik.result import TrackingResult
 from clik.robot import Robot
 from clik.scenario import Scenario, load_scenario
@@ -51,28 +58,43 @@ class Run:
 
 
 def _where(scenario: Scenario, key: str, exc: ClikError) -> ScenarioError:
-    return ScenarioError(scenario.file, key, str(exc))
+    message = str(exc)
+    field = getattr(exc, "field", None)
+    if field and message.startswith(f"{field}: "):  # do not repeat the field
+        message = message[len(field) + 2 :]
+    return ScenarioError(scenario.file, key, message)
 
 
-def build(scenario: Scenario | str | Path) -> Run:
-    """Build the objects of a scenario (loads the robot; computes nothing else)."""
+def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
+    """Build the objects of a scenario (loads the robot; computes nothing else).
+
+    Args:
+        scenario: A scenario or the path of a scenario file.
+        robot: The scenario's robot, loaded earlier (e.g. once per sweep worker);
+            default: load it from ``[robot]``.
+    """
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     spec = scenario.robot
-    try:
-        robot = Robot.load(
-            spec["source"], package_dirs=spec["package_dirs"] or None, lock=spec["lock"] or None
-        )
-    except JointNotFound as exc:
-        raise _where(scenario, "robot.lock", exc) from None
-    except ClikError as exc:
-        raise _where(scenario, "robot.source", exc) from None
+    if robot is None:
+        try:
+            robot = Robot.load(
+                spec["source"], package_dirs=spec["package_dirs"] or None, lock=spec["lock"] or None
+            )
+        except (JointNotFound, InputError) as exc:
+            raise _where(scenario, "robot.lock", exc) from None
+        except ClikError as exc:
+            raise _where(scenario, "robot.source", exc) from None
     try:
         q0 = robot.check_configuration(
             robot.q_reference if scenario.initial_q is None else scenario.initial_q, "initial.q"
         )
     except InputError as exc:
         raise _where(scenario, "initial.q", exc) from None
+    try:
+        robot.check_within_limits(q0, "initial.q")
+    except InfeasibleError as exc:
+        raise InfeasibleError(f"{scenario.file}: {exc.field}", exc.problem) from None
     try:
         task = Task(robot, scenario.task["frame"], scenario.task["kind"], scenario.task["axes"])
     except FrameNotFound as exc:

@@ -8,6 +8,11 @@ the key path (e.g. ``trajectory.duration``) and what was expected.
 
 Angles are given in the table's ``unit`` (``"rad"`` by default, or
 ``"deg"``) and converted once, here.
+
+A scenario is data only: TOML has no code, no includes and no variables, and
+no key here names a file to read but ``robot.source``, ``robot.package_dirs``
+and an obstacle's mesh ``file``: paths the user chose (absolute, or relative
+to the scenario's folder; URLs are refused, nothing is fetched).
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ import numpy as np
 
 from clik.errors import ClikError, ScenarioError
 from clik.schema import Table
+from clik.tracking import MAX_STEPS
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -29,6 +35,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 TRAJECTORY_KINDS = ("line", "circle", "waypoints", "hold")
+
 SHAPES = ("sphere", "box", "capsule", "cylinder", "mesh")
 UNITS = ("rad", "deg")
 
@@ -67,6 +74,10 @@ def load_scenario(path: str | Path) -> Scenario:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ScenarioError(path, "", f"not valid TOML ({exc})") from None
+    except RecursionError:  # tomllib recurses on nested arrays and inline tables
+        raise ScenarioError(
+            path, "", "not valid TOML (arrays or tables nested too deeply)"
+        ) from None
     return parse_scenario(data, path)
 
 
@@ -84,6 +95,8 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
 
     rob = top.table("robot", required=True)
     source = rob.string("source")
+    if "://" in source:
+        raise rob.error("source", "a robot name or a URDF path (URLs are not fetched)", source)
     looks_like_path = source.endswith(".urdf") or "/" in source or "\\" in source
     robot = {
         "source": _resolve(folder, source) if looks_like_path else source,
@@ -107,9 +120,14 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
         "kind": tsk.string("kind", "pose", ("position", "orientation", "pose")),
         "axes": _strings(tsk, "axes") or None,
     }
+    if tsk.has("axes") and task["axes"] is None:
+        raise tsk.error("axes", "a non-empty list of axis names (omit it for every axis)", [])
     tsk.done()
+    has_orientation = task["kind"] != "position" and (
+        task["axes"] is None or any(a.startswith("r") for a in task["axes"])
+    )
 
-    trajectory = _trajectory(top.table("trajectory", required=True), folder)
+    trajectory = _trajectory(top.table("trajectory", required=True), folder, has_orientation)
 
     slv = top.table("solver")
     gain = slv.raw("gain", 1000.0)
@@ -127,6 +145,16 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
         "record_every": slv.number("record_every", 1, minimum=1, integer=True),
         "settle": slv.number("settle", 0.0, minimum=0.0, unit="[s]"),
     }
+    if trajectory["duration"] is not None:
+        steps = (trajectory["duration"] + solver["settle"]) / solver["dt"] + 1
+        if steps > MAX_STEPS:
+            total = trajectory["duration"] + solver["settle"]
+            raise slv.error(
+                "dt",
+                f"a step giving at most {MAX_STEPS:.0e} steps over trajectory.duration + "
+                f"solver.settle = {total:g} s (this one gives {steps:.3g})",
+                solver["dt"],
+            )
     slv.done()
 
     obstacles = [_obstacle(t, folder) for t in top.tables("obstacles")]
@@ -147,7 +175,7 @@ def _strings(table: Table, name: str) -> list[str]:
     return value
 
 
-def _trajectory(tr: Table, folder: Path) -> dict[str, Any]:
+def _trajectory(tr: Table, folder: Path, has_orientation: bool = True) -> dict[str, Any]:
     kind = tr.string("kind", choices=TRAJECTORY_KINDS)
     scale = _angle_scale(tr)
     out: dict[str, Any] = {"kind": kind}
@@ -176,6 +204,8 @@ def _trajectory(tr: Table, folder: Path) -> dict[str, Any]:
     if kind != "hold" and out["duration"] is None and out.get("cruise_speed") is None:
         raise tr.error("duration", "a duration [s] or a cruise_speed")
     rpy = tr.vector("goal_rpy", 3, None)
+    if rpy is not None and not has_orientation:
+        raise tr.error("goal_rpy", "no goal_rpy: the task has no orientation rows", rpy)
     out["goal_rpy"] = None if rpy is None else [v * scale for v in rpy]
     tr.done()
     return out

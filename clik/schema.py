@@ -16,6 +16,16 @@ from typing import Any
 from clik.errors import ScenarioError
 
 _MISSING = object()
+_SHOWN = 200
+"""Longest shown value in a message, in characters (longer ones are cut)."""
+
+
+def _finite(value: int | float) -> bool:
+    """``math.isfinite`` that says no, not OverflowError, to a huge TOML integer."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
 
 
 class Table:
@@ -41,7 +51,10 @@ class Table:
         """A :class:`ScenarioError` for key ``name``."""
         message = f"expected {expected}"
         if got is not _MISSING:
-            message += f", got {got!r}"
+            shown = repr(got)
+            if len(shown) > _SHOWN:
+                shown = f"{shown[: _SHOWN - 20]}... ({len(shown)} characters)"
+            message += f", got {shown}"
         return ScenarioError(self.file, self.key(name), message)
 
     def has(self, name: str) -> bool:
@@ -110,7 +123,7 @@ class Table:
         if unit:
             kind += f" {unit}"
         ok_type = isinstance(value, int) if integer else isinstance(value, int | float)
-        if isinstance(value, bool) or not ok_type or not math.isfinite(value):
+        if isinstance(value, bool) or not ok_type or not _finite(value):
             raise self.error(name, kind, value)
         if minimum is not None and (value <= minimum if strict else value < minimum):
             raise self.error(name, kind, value)
@@ -127,8 +140,7 @@ class Table:
         if not isinstance(value, list) or (size is not None and len(value) != size):
             raise self.error(name, expected, value)
         if not all(
-            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-            for v in value
+            isinstance(v, int | float) and not isinstance(v, bool) and _finite(v) for v in value
         ):
             raise self.error(name, expected + " (finite)", value)
         return [float(v) for v in value]

@@ -3,7 +3,7 @@
 The reference is held (``xdot_d = 0``) and the law is iterated as a
 fixed-point map: ``q <- q (+) alpha dt J^+ e`` for law (10), with
 ``alpha dt = 1`` (a Gauss-Newton step, damped as Levenberg-Marquardt with
-``lambda^2 = lambda_0^2 + 10^-3 |e|^2``), or ``q <- q (+) alpha dt J^T e`` for
+``lambda^2 = lambda_0^2 + mu |e|^2``, ``mu = 10^-2``), or ``q <- q (+) alpha dt J^T e`` for
 law (9). For a full pose task the error is ``log6(oMf^-1 oMd)`` in the frame,
 with its exact Jacobian ``Jlog6 J_local`` (far from the target this converges
 where the world-frame ``log3`` error stalls). After each step joints are
@@ -23,7 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from clik.errors import InputError
-from clik.laws import LawName, check_law
+from clik.laws import LawName, check_law, solve_small
 from clik.task import Task
 
 
@@ -80,10 +80,11 @@ def solve(
     law: LawName = "pseudoinverse",
     step: float = 1.0,
     damping: float = 1e-6,
+    mu: float = 1e-2,
     tolerance: float = 1e-4,
     orientation_tolerance: float = 1e-3,
     max_iterations: int = 100,
-    restarts: int = 20,
+    restarts: int = 50,
     seed: int | None = 0,
 ) -> SolveResult:
     """Iterate a CLIK law until the task error is within tolerance.
@@ -95,6 +96,7 @@ def solve(
         law: ``"pseudoinverse"`` (10) (default) or ``"transpose"`` (9).
         step: ``alpha dt``, the fraction of the law's velocity applied per iteration.
         damping: ``lambda_0`` of the damped pseudoinverse.
+        mu: Levenberg-Marquardt factor: ``lambda^2 = lambda_0^2 + mu |e|^2``.
         tolerance: Position tolerance [m].
         orientation_tolerance: Orientation tolerance [rad].
         max_iterations: Iterations per attempt.
@@ -115,6 +117,9 @@ def solve(
     ):
         if not (math.isfinite(value) and value > 0):
             raise InputError(name, "a positive finite number", value)
+    for name, value in (("damping", damping), ("mu", mu)):
+        if not (math.isfinite(value) and value >= 0):
+            raise InputError(name, "a finite number >= 0", value)
     robot = task.robot
     model, data = robot.model, robot.data
     p_d, R_d = _target_arrays(target)
@@ -126,7 +131,7 @@ def solve(
         if arr is not None and not np.all(np.isfinite(arr)):
             raise InputError("target", "finite values", arr.tolist())
     q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
-    rng = np.random.default_rng(seed)
+    rng = None  # created at the first restart (it costs ~20 us)
     lower, upper = robot.lower, robot.upper
     bounded = np.isfinite(lower) & np.isfinite(upper) & (robot.nq == robot.nv)
     clip = bool(bounded.any())
@@ -140,67 +145,83 @@ def solve(
     pos_err = rot_err = math.inf
     iterations = 0
     attempts = 0
-    eye = np.eye(task.m)
+    eye_diag = slice(None, None, task.m + 1)
     LWA = pin.LOCAL_WORLD_ALIGNED
+    best_total, best_q, best_errors = math.inf, q.copy(), (math.inf, math.inf)
     start = time.perf_counter()
-    while attempts <= restarts:
-        attempts += 1
-        since_best = 0
-        best = math.inf
-        for _ in range(max_iterations):
-            if full_pose:  # log6 error in the frame, with its exact Jacobian (Jlog6)
-                pin.computeJointJacobians(model, data, q)
-                pin.updateFramePlacement(model, data, fid)
-                fMd = data.oMf[fid].actInv(target_se3)
-                e = pin.log6(fMd).vector
-                pos_err = math.sqrt(float(e[:3] @ e[:3]))
-                rot_err = math.sqrt(float(e[3:] @ e[3:]))
-                J = -pin.Jlog6(fMd.inverse()) @ pin.getFrameJacobian(model, data, fid, pin.LOCAL)
-                J = -J  # e decreases along J^+ e
-            else:
-                J6 = pin.computeFrameJacobian(model, data, q, fid, LWA)
-                oMf = data.oMf[fid]
-                if has_pos:
-                    np.subtract(p_d, oMf.translation, out=e_pos)
-                if has_rot:
-                    e_rot[:] = pin.log3(R_d @ oMf.rotation.T)
-                pos_err = math.sqrt(float(e_pos @ e_pos))
-                rot_err = math.sqrt(float(e_rot @ e_rot))
-                e = e6[rows]
-                J = J6[rows]
-            if pos_err <= tolerance and rot_err <= orientation_tolerance:
-                return SolveResult(
-                    True,
-                    f"converged in {iterations} iterations",
-                    q,
-                    iterations,
-                    attempts,
-                    pos_err,
-                    rot_err,
-                    time.perf_counter() - start,
-                )
-            iterations += 1
-            if law == "pseudoinverse":
-                lam2 = damping * damping + 1e-3 * float(e @ e)
-                dq = J.T @ np.linalg.solve(J @ J.T + lam2 * eye, e)
-            else:
-                dq = J.T @ e
-            q = pin.integrate(model, q, step * dq)
-            if clip:
-                np.clip(q, lo, hi, out=q)
-            total = pos_err + rot_err
-            if total < 0.999 * best:
-                best, since_best = total, 0
-            else:
-                since_best += 1
-                if since_best >= 15:
-                    break
-        if attempts <= restarts:
-            q = robot.random_configuration(rng)
+    with np.errstate(invalid="ignore", divide="ignore"):  # solve_small checks for NaN
+        while attempts <= restarts:
+            attempts += 1
+            since_best = 0
+            best = math.inf
+            for _ in range(max_iterations):
+                if full_pose:  # log6 error in the frame, with its exact Jacobian (Jlog6)
+                    pin.computeJointJacobians(model, data, q)
+                    fMd = pin.updateFramePlacement(model, data, fid).actInv(target_se3)
+                    e = pin.log6(fMd).vector
+                    a, b, c, x, y, z = e.tolist()
+                    pos_err = math.sqrt(a * a + b * b + c * c)
+                    rot_err = math.sqrt(x * x + y * y + z * z)
+                    J = pin.Jlog6(fMd.inverse()).dot(
+                        pin.getFrameJacobian(model, data, fid, pin.LOCAL)
+                    )
+                else:
+                    J6 = pin.computeFrameJacobian(model, data, q, fid, LWA)
+                    oMf = data.oMf[fid]
+                    if has_pos:
+                        np.subtract(p_d, oMf.translation, out=e_pos)
+                    if has_rot:
+                        e_rot[:] = pin.log3(R_d.dot(oMf.rotation.T))
+                    pos_err = math.sqrt(e_pos.dot(e_pos))
+                    rot_err = math.sqrt(e_rot.dot(e_rot))
+                    e = e6[rows]
+                    J = J6[rows]
+                if pos_err <= tolerance and rot_err <= orientation_tolerance:
+                    oMf = data.oMf[fid]
+                    if has_pos:  # report the world-frame errors, not log6's components
+                        pos_err = float(np.linalg.norm(p_d - oMf.translation))
+                    if has_rot:
+                        rot_err = float(np.linalg.norm(pin.log3(R_d.dot(oMf.rotation.T))))
+                    return SolveResult(
+                        True,
+                        f"converged in {iterations} iterations",
+                        q,
+                        iterations,
+                        attempts,
+                        pos_err,
+                        rot_err,
+                        time.perf_counter() - start,
+                    )
+                iterations += 1
+                if law == "pseudoinverse":
+                    A = J.dot(J.T)
+                    A.flat[eye_diag] += damping * damping + mu * (pos_err**2 + rot_err**2)
+                    dq = J.T.dot(solve_small(A, e))
+                else:
+                    dq = J.T.dot(e)
+                dq *= step
+                q = pin.integrate(model, q, dq)
+                if clip and ((q < lo).any() or (q > hi).any()):
+                    np.maximum(q, lo, out=q)
+                    np.minimum(q, hi, out=q)
+                total = pos_err + rot_err
+                if total < 0.999 * best:
+                    best, since_best = total, 0
+                else:
+                    since_best += 1
+                    if since_best >= 15:
+                        break
+            if pos_err + rot_err < best_total:  # keep the best attempt for a failure report
+                best_total, best_q, best_errors = pos_err + rot_err, q.copy(), (pos_err, rot_err)
+            if attempts <= restarts:
+                if rng is None:
+                    rng = np.random.default_rng(seed)
+                q = robot.random_configuration(rng)
+    pos_err, rot_err = best_errors
     reason = (
-        f"no convergence after {attempts} attempt(s), {iterations} iterations: position error "
-        f"{pos_err:.3g} m, orientation error {rot_err:.3g} rad"
+        f"no convergence after {attempts} attempt(s), {iterations} iterations; best attempt: "
+        f"position error {pos_err:.3g} m, orientation error {rot_err:.3g} rad"
     )
     return SolveResult(
-        False, reason, q, iterations, attempts, pos_err, rot_err, time.perf_counter() - start
+        False, reason, best_q, iterations, attempts, pos_err, rot_err, time.perf_counter() - start
     )

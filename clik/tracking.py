@@ -19,7 +19,14 @@ import pinocchio as pin
 
 from clik.errors import InputError
 from clik.gains import row_gains, stability_margin
-from clik.laws import LawName, check_law, nonlinear, pseudoinverse, transpose
+from clik.laws import (
+    LawName,
+    check_law,
+    nonlinear,
+    pseudoinverse,
+    transpose,
+)
+from clik.reference_stream import REFERENCE_CHUNK, ReferenceChunks
 from clik.result import TrackingResult
 from clik.task import Task
 from clik.trajectory import Trajectory, time_grid
@@ -28,6 +35,12 @@ if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
 
 ProgressCallback = Callable[[int, int], None]
+
+
+MAX_STEPS = 100_000_000
+"""Largest run, ``(duration + settle) / dt + 1`` samples (about 15 minutes at 8 us per
+step): a typo in ``dt`` fails at once, not as a run that never ends or an allocation
+that cannot succeed."""
 
 
 class StabilityWarning(UserWarning):
@@ -147,32 +160,39 @@ class Tracker:
         robot, task = self.robot, self.task
         model, data = robot.model, robot.data
         q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
+        robot.check_within_limits(q, "q0")
         if not isinstance(record_every, int | np.integer) or record_every < 1:
             raise InputError("record_every", "an integer >= 1", record_every)
         if not (math.isfinite(settle) and settle >= 0.0):
             raise InputError("settle", "a time >= 0 [s]", settle)
+        steps_needed = (trajectory.duration + settle) / self.dt + 1
+        if steps_needed > MAX_STEPS:
+            raise InputError(
+                "dt",
+                f"a step giving at most {MAX_STEPS:.0e} steps over the trajectory's "
+                f"{trajectory.duration + settle:g} s (this one gives {steps_needed:.3g})",
+                self.dt,
+            )
         t = time_grid(trajectory.duration + settle, self.dt)
-        ref = trajectory.sample(t)
-        P_d, R_d, FF = _task_reference(task, ref, t.shape[0])
         N, m, nv, dt = t.shape[0], task.m, robot.nv, self.dt
         fid, rows, sl = task.frame_id, task.rows, task._slice
         has_pos, has_rot = task.has_position, task.has_orientation
+        # The reference is sampled in chunks: a 10^6-sample run never holds it whole.
+        chunk = ReferenceChunks(task, trajectory, t, REFERENCE_CHUNK)
 
         self._warn_stability(q, m)
         constraints = self.constraints
 
-        # Preallocated record.
-        keep = np.zeros(N, dtype=bool)
-        keep[::record_every] = True
-        keep[-1] = True
-        n_rec = int(keep.sum())
+        # Preallocated record: every record_every-th sample, and the last one.
+        n_rec = (N - 1) // record_every + 1 + (1 if (N - 1) % record_every else 0)
+        rec_idx = np.empty(n_rec, dtype=np.intp)
         rec_q = np.empty((n_rec, robot.nq))
         rec_qdot = np.empty((n_rec, nv))
         rec_qddot = np.zeros((n_rec, nv))
         rec_pos = np.empty((n_rec, 3))
+        rec_ref = np.empty((n_rec, 3)) if has_pos else None
         rec_err = np.empty(n_rec)
         rec_rot_err = np.empty(n_rec) if (has_rot and has_pos) else None
-        rec_idx = np.flatnonzero(keep)
         if constraints is not None:
             constraints.reset(q, t, n_rec)
         rec_active = np.zeros(n_rec, dtype=np.int16) if constraints is not None else None
@@ -185,6 +205,8 @@ class Tracker:
         J_e, e_e, ff_e = self.J_e, self.e_e, self.ff_e
         J_task, e_task = J_e[:m], e_e[:m]
         e6, e6_pos, e6_rot = self._e6, self._e6[:3], self._e6[3:]
+        # Without constraints a full pose task runs the law on Pinocchio's J and e6 directly.
+        direct = constraints is None and m == 6
         qdot = np.zeros(nv)
         dq = np.zeros(nv)
         max_err = 0.0
@@ -193,103 +215,131 @@ class Tracker:
         window = max(1, round(deadlock_window / dt))
         check_every = 10
         stuck = 0
-        at_rest = ~np.any(FF != 0.0, axis=1)
         stall_steps = max(1, round(stall_window / dt))
         stall_k, stall_err = -1, 0.0
         progress_every = max(1, N // 100)
         j = 0  # next record slot
         steps = 0
         LWA = pin.LOCAL_WORLD_ALIGNED
+        # Live views on the frame's placement in data (updated by every kinematics call).
+        pin.framesForwardKinematics(model, data, q)
+        translation, rotation_T = data.oMf[fid].translation, data.oMf[fid].rotation.T
+        P_d = R_d = FF = at_rest = None
+        c0 = c1 = 0
+        law = self.law
+        K_task, work, damping = self.K_task, self._work[:m], self.damping
         start = time.perf_counter()
-        for k in range(N):
-            if constraints is None:
-                J6 = pin.computeFrameJacobian(model, data, q, fid, LWA)
-            else:  # every joint's kinematics and Jacobian: constraint rows need them
-                pin.computeJointJacobians(model, data, q)
-                pin.updateFramePlacement(model, data, fid)
-                J6 = pin.getFrameJacobian(model, data, fid, LWA)
-            oMf = data.oMf[fid]
-            if has_pos:
-                np.subtract(P_d[k], oMf.translation, out=e6_pos)
-            if has_rot:
-                e6_rot[:] = pin.log3(R_d[k] @ oMf.rotation.T)
-            if sl is not None:
-                e_task[:] = e6[sl]
-                J_task[:] = J6[sl]
-            else:
-                np.take(e6, rows, out=e_task)
-                np.take(J6, rows, axis=0, out=J_task)
-            ff_e[:m] = FF[k]
-            r = m if constraints is None else m + constraints.update(k, q)
-            self.law_velocity(r, qdot)
-            err = (
-                math.sqrt(float(np.dot(e6_pos, e6_pos)))
-                if has_pos
-                else math.sqrt(float(np.dot(e6_rot, e6_rot)))
-            )
-            if err > max_err:
-                max_err = err
-            stop = False
-            if k % check_every == 0:
-                jump = float(np.abs(qdot).max()) * dt
-                if not (math.isfinite(err) and math.isfinite(jump)):
-                    status, stop = "diverged", True
-                    reason = f"non-finite joint velocity or task error at t = {t[k]:.6g} s"
-                elif jump > max_joint_step:
-                    status, stop = "diverged", True
-                    reason = self._divergence_reason(t[k], jump, r)
-                elif err > deadlock_error and self._deadlocked(r, deadlock_ratio):
-                    stuck += check_every
-                    if stuck >= window:
-                        status, stop = "deadlock", True
-                        reason = self._deadlock_reason(t[k], err, r)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            for k in range(N):
+                if k == c1:
+                    c0, c1, P_d, R_d, FF, at_rest = chunk.load(k)
+                kk = k - c0
+                if constraints is None:
+                    J6 = pin.computeFrameJacobian(model, data, q, fid, LWA)
+                else:  # every joint's kinematics and Jacobian: constraint rows need them
+                    pin.computeJointJacobians(model, data, q)
+                    pin.updateFramePlacement(model, data, fid)
+                    J6 = pin.getFrameJacobian(model, data, fid, LWA)
+                if has_pos:
+                    np.subtract(P_d[kk], translation, out=e6_pos)
+                if has_rot:
+                    e6_rot[:] = pin.log3(R_d[kk].dot(rotation_T))
+                if direct:
+                    r = m
+                    if law == "pseudoinverse":
+                        pseudoinverse(J6, e6, K_task, FF[kk], qdot, work, damping)
+                    elif law == "transpose":
+                        transpose(J6, e6, K_task, FF[kk], qdot, work)
+                    else:
+                        nonlinear(J6, e6, K_task, FF[kk], qdot, work, self._jte, self.beta_max)
                 else:
-                    stuck = 0
-                # The same condition seen through its effect: at rest, the error stalls.
-                if err > deadlock_error and at_rest[k]:
-                    if stall_k < 0:
-                        stall_k, stall_err = k, err
-                    elif k - stall_k >= stall_steps:
-                        if err > (1.0 - stall_progress) * stall_err:
+                    if sl is not None:
+                        e_task[:] = e6[sl]
+                        J_task[:] = J6[sl]
+                    else:
+                        np.take(e6, rows, out=e_task)
+                        np.take(J6, rows, axis=0, out=J_task)
+                    ff_e[:m] = FF[kk]
+                    r = m if constraints is None else m + constraints.update(k, q)
+                    self.law_velocity(r, qdot)
+                err = math.sqrt(e6_pos.dot(e6_pos)) if has_pos else math.sqrt(e6_rot.dot(e6_rot))
+                if err > max_err:
+                    max_err = err
+                stop = False
+                if k % check_every == 0:
+                    if direct:  # the deadlock test reads the task rows from J_e, e_e
+                        J_task[:] = J6
+                        e_task[:] = e6
+                    jump = float(np.abs(qdot).max()) * dt
+                    if not (math.isfinite(err) and math.isfinite(jump)):
+                        status, stop = "diverged", True
+                        reason = f"non-finite joint velocity or task error at t = {t[k]:.6g} s"
+                    elif jump > max_joint_step:
+                        status, stop = "diverged", True
+                        reason = self._divergence_reason(t[k], jump, r, err)
+                    elif err > deadlock_error and self._deadlocked(r, deadlock_ratio):
+                        stuck += check_every
+                        if stuck >= window:
                             status, stop = "deadlock", True
-                            reason = self._deadlock_reason(t[k], err, r) + (
-                                f"; the error fell by less than {stall_progress:.0%} in "
-                                f"{stall_window:g} s with the reference at rest"
-                            )
-                        stall_k, stall_err = k, err
-                else:
-                    stall_k = -1
-            if keep[k] or stop:
-                rec_idx[j] = k
-                rec_q[j] = q
-                rec_qdot[j] = qdot
-                rec_pos[j] = oMf.translation
-                rec_err[j] = err
-                if rec_rot_err is not None:
-                    rec_rot_err[j] = math.sqrt(float(np.dot(e6_rot, e6_rot)))
+                            reason = self._deadlock_reason(t[k], err, r)
+                    else:
+                        stuck = 0
+                    # The same condition seen through its effect: at rest, the error stalls.
+                    if err > deadlock_error and at_rest[kk]:
+                        if stall_k < 0:
+                            stall_k, stall_err = k, err
+                        elif k - stall_k >= stall_steps:
+                            if err > (1.0 - stall_progress) * stall_err:
+                                status, stop = "deadlock", True
+                                reason = self._deadlock_reason(t[k], err, r) + (
+                                    f"; the error fell by less than {stall_progress:.0%} in "
+                                    f"{stall_window:g} s with the reference at rest"
+                                )
+                            stall_k, stall_err = k, err
+                    else:
+                        stall_k = -1
+                if k % record_every == 0 or k == N - 1 or stop:
+                    rec_idx[j] = k
+                    rec_q[j] = q
+                    rec_qdot[j] = qdot
+                    rec_pos[j] = translation
+                    rec_err[j] = err
+                    if rec_ref is not None:
+                        rec_ref[j] = P_d[kk]
+                    if rec_rot_err is not None:
+                        rec_rot_err[j] = math.sqrt(e6_rot.dot(e6_rot))
+                    if decimated:
+                        np.subtract(qdot, qdot_prev, out=rec_qddot[j])
+                    if constraints is not None:
+                        rec_active[j] = r - m
+                        rec_dist[j] = constraints.min_distance
+                        constraints.record(j)
+                    j += 1
                 if decimated:
-                    np.subtract(qdot, qdot_prev, out=rec_qddot[j])
-                if constraints is not None:
-                    rec_active[j] = r - m
-                    rec_dist[j] = constraints.min_distance
-                    constraints.record(j)
-                j += 1
-            if decimated:
-                np.minimum(joint_min, q, out=joint_min)
-                np.maximum(joint_max, q, out=joint_max)
-                qdot_prev[:] = qdot
-            steps = k + 1
-            if stop:
-                break
-            if progress is not None and k % progress_every == 0:
-                progress(k, N)
-            if k + 1 < N:
-                np.multiply(qdot, dt, out=dq)
-                q = pin.integrate(model, q, dq)
+                    np.minimum(joint_min, q, out=joint_min)
+                    np.maximum(joint_max, q, out=joint_max)
+                    qdot_prev[:] = qdot
+                steps = k + 1
+                if stop:
+                    break
+                if progress is not None and k % progress_every == 0:
+                    progress(k, N)
+                if k + 1 < N:
+                    np.multiply(qdot, dt, out=dq)
+                    q = pin.integrate(model, q, dq)
         wall = time.perf_counter() - start
         if progress is not None:
             progress(N if status == "completed" else steps, N)
 
+        if constraints is not None and status == "completed":
+            skipped = sorted(
+                {e["constraint"] for e in constraints.events if e["action"] == "skipped"}
+            )
+            if skipped:
+                reason += (
+                    f"; {len(skipped)} violated constraint(s) found no free row (more than "
+                    f"n - m at once) and were skipped: {', '.join(skipped)}"
+                )
         n_rec = j  # fewer when the run stopped early
         sl_rec = slice(0, n_rec)
         rec_t = t[rec_idx[sl_rec]]
@@ -318,7 +368,7 @@ class Tracker:
             qdot=rec_qdot,
             qddot=rec_qddot,
             position=rec_pos[sl_rec],
-            reference_position=None if P_d is None else P_d[rec_idx[sl_rec]],
+            reference_position=None if rec_ref is None else rec_ref[sl_rec],
             task_error_norm=rec_err[sl_rec],
             orientation_error_norm=None if rec_rot_err is None else rec_rot_err[sl_rec],
             status=status,
@@ -347,11 +397,14 @@ class Tracker:
         scale = float(np.linalg.norm(J)) * float(np.linalg.norm(Ke))
         return scale > 0.0 and force <= ratio * scale
 
-    def _divergence_reason(self, t: float, jump: float, r: int) -> str:
+    def _divergence_reason(self, t: float, jump: float, r: int, err: float) -> str:
         m = self.task.m
-        head = f"a joint moved {jump:.3g} rad in one step at t = {t:.6g} s: "
+        head = f"a joint moved {jump:.3g} rad in one step at t = {t:.6g} s (task error {err:.3g}): "
         if r == m or self.constraints is None:
-            return head + "the gain is too high for dt (alpha dt lambda_max(J J^T) >= 2?)"
+            return head + (
+                "the gain is too high for dt (alpha dt lambda_max(J J^T) >= 2?), or the "
+                "reference leaves the workspace through a singularity"
+            )
         names = ", ".join(self.constraints.active_names())
         return head + (
             f"with {r - m} active constraint row(s) ({names}) the extended Jacobian J_e is "
@@ -378,25 +431,6 @@ class Tracker:
                 StabilityWarning,
                 stacklevel=3,
             )
-
-
-def _task_reference(
-    task: Task, ref: object, n: int
-) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray]:
-    """Reference arrays for the task's rows: positions, rotations and velocities (N, m)."""
-    P_d = getattr(ref, "position", None)
-    R_d = getattr(ref, "rotation", None)
-    if task.has_position and P_d is None:
-        raise InputError("trajectory", f"a position reference for the {task.kind} task")
-    if task.has_orientation and R_d is None:
-        raise InputError("trajectory", f"an orientation reference for the {task.kind} task")
-    V6 = np.zeros((n, 6))
-    if task.has_position:
-        V6[:, :3] = ref.linear_velocity  # type: ignore[attr-defined]
-    if task.has_orientation:
-        V6[:, 3:] = ref.angular_velocity  # type: ignore[attr-defined]
-    FF = np.ascontiguousarray(V6[:, task.rows])
-    return P_d, R_d, FF
 
 
 def track(

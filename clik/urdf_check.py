@@ -31,6 +31,7 @@ Fail = Callable[..., RobotLoadError]
 """Builds the error for a problem found at an element: ``fail(problem, element)``."""
 
 _ENTITY = re.compile(rb"<!ENTITY")
+_XINCLUDE = "{http://www.w3.org/2001/XInclude}"
 _DOCTYPE = re.compile(rb"<!DOCTYPE\s+[^\s\[>]+\s*([^\[>]*)")
 
 
@@ -39,7 +40,10 @@ def parse_xml(path: str | Path) -> etree._ElementTree:
 
     The raw bytes are scanned first: entity declarations and external DTD
     references are refused before the XML parser sees them, so neither an
-    external entity (XXE) nor an entity bomb is ever expanded.
+    external entity (XXE) nor an entity bomb is ever expanded. The parser
+    itself never loads a DTD, resolves an entity or touches the network, and
+    XInclude elements are refused (nothing downstream would expand them, but
+    a URDF that asks for another file is not one to hand on).
 
     Args:
         path: The XML file.
@@ -48,8 +52,9 @@ def parse_xml(path: str | Path) -> etree._ElementTree:
         The parsed document.
 
     Raises:
-        RobotLoadError: The file is missing, empty, not well-formed XML, or its
-            DOCTYPE declares entities or an external reference.
+        RobotLoadError: The file is missing, empty, not well-formed XML, its
+            DOCTYPE declares entities or an external reference, or it holds an
+            XInclude element.
     """
     path = Path(path)
     if not path.is_file():
@@ -83,6 +88,13 @@ def parse_xml(path: str | Path) -> etree._ElementTree:
     dtd = tree.docinfo.internalDTD  # second line of defence, e.g. for UTF-16 files
     if tree.docinfo.system_url or tree.docinfo.public_id or (dtd and list(dtd.iterentities())):
         raise RobotLoadError(path, "the DOCTYPE declares entities or an external reference")
+    for element in tree.iter():
+        if isinstance(element.tag, str) and element.tag.startswith(_XINCLUDE):
+            raise RobotLoadError(
+                path,
+                "XInclude elements are refused (they can read other files)",
+                line=element.sourceline,
+            )
     return tree
 
 
@@ -94,9 +106,11 @@ def check_urdf(path: str | Path, package_dirs: Sequence[str | Path] = ()) -> etr
     that exist; a tree (no cycle, a single root link, each link the child of at
     most one joint); at least one movable joint; finite numbers in origins, axes,
     limits and geometry; ``lower <= upper`` for revolute and prismatic joints;
-    mesh files that exist, where ``package://pkg/rest`` is looked up as
-    ``<dir>/pkg/rest`` for each ``dir`` in ``package_dirs`` and must not leave
-    the ``pkg`` folder, and a relative filename is relative to the URDF's folder.
+    no negative effort or velocity limit, mass or primitive size (box, cylinder,
+    sphere; a zero radius is allowed: planar arms use segments); mesh files that
+    exist, where ``package://pkg/rest`` is looked up as ``<dir>/pkg/rest`` for
+    each ``dir`` in ``package_dirs`` and must not leave the ``pkg`` folder, and a
+    relative filename is relative to the URDF's folder.
 
     Args:
         path: The URDF file.
@@ -201,9 +215,14 @@ def _check_tree(links: dict[str, etree._Element], parent_of: dict[str, str], fai
 
 
 def _numbers(
-    element: etree._Element, attribute: str, count: int, what: str, fail: Fail
+    element: etree._Element,
+    attribute: str,
+    count: int,
+    what: str,
+    fail: Fail,
+    nonnegative: bool = False,
 ) -> list[float]:
-    """Read ``count`` finite numbers from an attribute."""
+    """Read ``count`` finite numbers from an attribute (each ``>= 0`` when ``nonnegative``)."""
     text = element.get(attribute)
     try:
         values = [float(word) for word in text.split()] if text is not None else []
@@ -213,6 +232,8 @@ def _numbers(
         raise fail(f"{what} {attribute}={text!r} is not {count} number(s)", element)
     if not all(math.isfinite(value) for value in values):
         raise fail(f"{what} {attribute}={text!r} is not finite", element)
+    if nonnegative and any(value < 0.0 for value in values):
+        raise fail(f"{what} {attribute}={text!r} is negative", element)
     return values
 
 
@@ -238,9 +259,9 @@ def _check_joint_numbers(name: str, joint: etree._Element, fail: Fail) -> None:
         if kind in ("revolute", "prismatic"):
             raise fail(f"{what} is {kind} but has no <limit>", joint)
         return
-    values = {
-        attribute: _numbers(limit, attribute, 1, f"{what} limit", fail)[0]
-        for attribute in ("lower", "upper", "effort", "velocity")
+    values = {  # effort and velocity are bounds on magnitudes: never negative
+        attribute: _numbers(limit, attribute, 1, f"{what} limit", fail, attribute in _MAGNITUDES)[0]
+        for attribute in ("lower", "upper", *_MAGNITUDES)
         if limit.get(attribute) is not None
     }
     lower, upper = values.get("lower", 0.0), values.get("upper", 0.0)
@@ -248,7 +269,10 @@ def _check_joint_numbers(name: str, joint: etree._Element, fail: Fail) -> None:
         raise fail(f"{what} has lower limit {lower:g} above its upper limit {upper:g}", limit)
 
 
+_MAGNITUDES = ("effort", "velocity")
+
 _SHAPES = {"box": {"size": 3}, "cylinder": {"radius": 1, "length": 1}, "sphere": {"radius": 1}}
+"""Primitive shapes and their size attributes (finite, >= 0; a radius 0 is a segment)."""
 
 
 def _check_link(
@@ -260,7 +284,7 @@ def _check_link(
         _check_origin(inertial, f"{what} inertial", fail)
         mass = inertial.find("mass")
         if mass is not None:
-            _numbers(mass, "value", 1, f"{what} mass", fail)
+            _numbers(mass, "value", 1, f"{what} mass", fail, nonnegative=True)
         inertia = inertial.find("inertia")
         for attribute in () if inertia is None else inertia.attrib:
             _numbers(inertia, attribute, 1, f"{what} inertia", fail)
@@ -269,7 +293,7 @@ def _check_link(
             _check_origin(element, f"{what} {kind}", fail)
             for shape in element.iterfind("geometry/*"):
                 for attribute, count in _SHAPES.get(shape.tag, {}).items():
-                    _numbers(shape, attribute, count, f"{what} {kind} {shape.tag}", fail)
+                    _numbers(shape, attribute, count, f"{what} {kind} {shape.tag}", fail, True)
                 if shape.tag == "mesh":
                     if shape.get("scale") is not None:
                         _numbers(shape, "scale", 3, f"{what} {kind} mesh", fail)

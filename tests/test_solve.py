@@ -29,7 +29,7 @@ def test_failure_says_why(panda):
     result = solve(task, [3.0, 0.0, 0.5], restarts=1, max_iterations=30)
     assert not result.success
     assert result.status == "max_iterations"
-    assert "no convergence after 2 attempt(s)" in result.reason
+    assert "no convergence after 2 attempt(s)" in result.reason and "best attempt" in result.reason
     assert result.position_error > 1.0
 
 

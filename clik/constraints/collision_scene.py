@@ -110,6 +110,7 @@ class CollisionScene:
                 stacklevel=3,
             )
         self.n_links = len(self.link_names)
+        self.local_radius = np.asarray(local_radius)
         self.link_joint = np.asarray(link_joint, dtype=np.intp)
         # One bounding sphere per joint, about the joint origin, enclosing its geometries.
         self.joints = [int(j) for j in np.unique(self.link_joint)]
@@ -180,6 +181,34 @@ class CollisionScene:
                 gmodel.addCollisionPair(pin.CollisionPair(a, b))
 
     # -- per step ----------------------------------------------------------------------
+
+    def motion_bounds(self) -> np.ndarray:
+        """``rho`` (n_links, nv): ``|pdot| <= rho_i . |qdot|`` for any point ``p`` of link ``i``.
+
+        ``rho_ij`` bounds the distance from joint ``j``'s axis to any point of link ``i``'s
+        geometry (configuration independent: the chain of joint offsets from ``j`` to ``i``'s
+        joint plus the geometry's radius about that joint); 1 for a prismatic joint, 0 for
+        a joint that does not move link ``i``.
+        """
+        model = self.model
+        offset = [float(np.linalg.norm(M.translation)) for M in model.jointPlacements]
+        rho = np.zeros((self.n_links, model.nv))
+        for i in range(self.n_links):
+            j, length = int(self.link_joint[i]), 0.0
+            while j > 0:
+                joint = model.joints[j]
+                arm = length + float(self.local_radius[i])
+                name = joint.shortname()
+                if joint.nv > 1:  # planar, spherical, free-flyer: rotations and translations
+                    bound = arm + 1.0
+                elif name.startswith("JointModelP"):  # prismatic: a point moves by |dq|
+                    bound = 1.0
+                else:  # revolute
+                    bound = arm
+                rho[i, joint.idx_v : joint.idx_v + joint.nv] = bound
+                length += offset[j]
+                j = model.parents[j]
+        return rho
 
     def place_joints(self, data: pin.Data) -> np.ndarray:
         """Joint origins (n_joints, 3) [m] from ``data.oMi``: bounding-sphere centres."""

@@ -75,8 +75,9 @@ class ConstraintSet:
         hysteresis: With the sign rule, release only when the error is below
             ``-hysteresis * threshold``.
         max_active: Bound on active rows (default and maximum ``n - m``, eq. (22)).
-        monitor_margin: Pairs farther than ``threshold + monitor_margin`` [m] are pruned;
-            their recorded distance is a bounding-sphere lower bound.
+        monitor_margin: An obstacle's recorded distance is exact within
+            ``threshold + monitor_margin`` [m]; beyond it, a lower bound no smaller than that
+            (``min_obstacle_distance_exact_by_obstacle`` in the summary says which).
 
     Default gains: with law (10) every row gets the task's largest gain ``alpha``
     (``J_e^+`` normalises rows). With laws (9) and (8) a row adds about
@@ -228,11 +229,12 @@ class ConstraintSet:
             sp = np.array([(a, b) for _, a, b in scene.self_pairs])
             self.self_slots = (scene.link_slot[sp[:, 0]], scene.link_slot[sp[:, 1]])
         self._obs_rmin = np.full(n_obs, np.inf)
-        self._cutoff = np.broadcast_to(
-            self.obs_threshold + self.monitor_margin, (len(scene.joints), n_obs)
-        ).copy()
-        self._near = np.zeros((len(scene.joints), n_obs), dtype=bool)
+        self._rho = scene.motion_bounds()
+        self._thr_matrix = np.broadcast_to(self.obs_threshold, (scene.n_links, n_obs)).copy()
+        self._margin = self.obs_threshold + self.monitor_margin
+        self._near = np.zeros((scene.n_links, n_obs), dtype=bool)
         self._better = np.zeros(n_obs, dtype=bool)
+        self._obs_index = np.arange(n_obs)
 
     def bind(self, tracker: Tracker) -> None:
         """Attach to a tracker (called by :class:`~clik.tracking.Tracker`)."""
@@ -262,6 +264,7 @@ class ConstraintSet:
         self.run_min = np.full(n_obs, np.inf)
         self.run_min_link = ["" for _ in range(n_obs)]
         self.run_min_t = np.zeros(n_obs)
+        self.run_min_exact = [False] * n_obs
         self.codes: dict[str, int] = {}
         self.rec_dist = np.full((n_rec, n_obs), np.inf)
         self.rec_link = np.full((n_rec, n_obs), -1, dtype=np.int16)
@@ -269,6 +272,14 @@ class ConstraintSet:
         self.rec_witness = np.full((n_rec, max(self.limit, 1), 2, 3), np.nan)
         self._dist_o = np.full(n_obs, np.inf)
         self._link_o = np.full(n_obs, -1, dtype=np.int16)
+        if self.scene is not None:  # distance certificates: unknown (-inf) at the start
+            self._lb = np.full((self.scene.n_links, n_obs), -np.inf)
+            self._evaluated = np.zeros((self.scene.n_links, n_obs), dtype=bool)
+        self._q_prev: np.ndarray | None = None
+        self._joint_slack = -1.0  # unknown: evaluate at the first sample
+        dt = float(t[1] - t[0]) if t.shape[0] > 1 else 0.0
+        speed = np.linalg.norm(self.obs_vel, axis=1) * dt
+        self._obs_step = speed[None, :] if np.any(speed > 0.0) else None
 
     # -- per step ----------------------------------------------------------------------
 
@@ -276,6 +287,7 @@ class ConstraintSet:
         """Evaluate, activate, fill the active rows and release; returns ``v`` active rows."""
         tk = float(self.t[k])
         candidates = self._evaluate(tk, q)
+        self._q_prev = q  # the tracker makes a new array per step (pin.integrate)
         active_keys = {c.key for c in self.active}
         current = {c.key: c for c in candidates}
         # Refresh the active constraints' data; drop those no longer evaluated (far away).
@@ -318,8 +330,22 @@ class ConstraintSet:
         """Constraints whose error is positive, or that are active, at this sample."""
         out: list[_Candidate] = []
         active = {c.key for c in self.active}
+        # |dq| since the last sample, shared by the joint-range and obstacle certificates
+        if self._q_prev is None:
+            self._dq_abs = None
+        else:
+            dq = pin.difference(self.robot.model, self._q_prev, q)  # type: ignore[attr-defined]
+            self._dq_abs = np.abs(dq, out=dq)
         jl = self.joint_limits
         if jl is not None:
+            # Certificate: the smallest margin to a threshold band, lowered by max |dq| per
+            # step; the rows are evaluated only when it may be crossed or a row is active.
+            if self._dq_abs is not None:
+                self._joint_slack -= float(self._dq_abs.max())
+            joint_active = any(c.kind == "joint" for c in self.active)
+            if self._joint_slack <= 0.0 or joint_active:
+                self._joint_slack = jl.slack(q)
+        if jl is not None and (self._joint_slack <= 0.0 or joint_active):
             e = jl.evaluate(q)
             for i in np.flatnonzero(e > -jl._thr):
                 key = jl.names[i]
@@ -330,39 +356,52 @@ class ConstraintSet:
         return out
 
     def _evaluate_scene(self, tk: float, out: list[_Candidate], active: set[str]) -> None:
+        """Link-obstacle pairs through distance certificates, then link-link pairs.
+
+        Every pair keeps a lower bound of its distance: exact when coal last evaluated
+        it, lowered each step by how far the link can have moved (``rho |dq|``, see
+        :meth:`CollisionScene.motion_bounds`) and the obstacle's ``|v| dt``. coal is
+        asked only for pairs whose bound is below the threshold (or active) and, per
+        obstacle, for the nearest pair within ``threshold + monitor_margin``, so the
+        recorded per-obstacle minimum is exact there and a lower bound beyond it.
+        """
         scene = self.scene
         assert scene is not None
-        data = self.robot.data  # type: ignore[attr-defined]
-        scene.place_joints(data)
+        robot = self.robot
+        data = robot.data  # type: ignore[attr-defined]
         placed = False
         self.min_distance = math.inf
         if self.obstacles:
-            centers = self.obs_pos0 + tk * self.obs_vel if self._moving else self.obs_pos0
-            lb = scene.obstacle_lower_bounds(centers)
-            dist_o, link_o = self._dist_o, self._link_o
-            np.min(lb, axis=0, out=dist_o)
-            link_o[:] = -1
-            near = np.less(lb, self._cutoff, out=self._near)
-            if near.any():
-                scene.place_geometries(data, tk)
-                placed = True
-            for slot, o in np.argwhere(near) if placed else ():
-                thr = float(self.obs_threshold[o])
-                for i in self.slot_links[slot]:
-                    pair = int(scene.obstacle_pairs[i, o])
-                    dist, p_link, p_obs, normal = scene.distance(pair)
-                    if dist < dist_o[o] or link_o[o] < 0:
-                        dist_o[o], link_o[o] = dist, i
+            lb, evaluated = self._lb, self._evaluated
+            if self._dq_abs is not None:
+                lb -= self._rho.dot(self._dq_abs)[:, None]
+                if self._obs_step is not None:
+                    lb -= self._obs_step
+            evaluated[:] = False
+            todo = np.argwhere(np.less(lb, self._thr_matrix, out=self._near)).tolist()
+            todo += [c.payload[7] for c in self.active if c.kind == "obstacle"]
+            thr_o, margin_o = self.obs_threshold, self._margin
+            n_obs = len(self.obstacles)
+            while True:  # evaluate, then the nearest pair of each obstacle, until settled
+                for i, o in todo:
+                    if evaluated[i, o]:
+                        continue
+                    if not placed:
+                        scene.place_geometries(data, tk)
+                        placed = True
+                    dist, p_link, p_obs, normal = scene.distance(int(scene.obstacle_pairs[i, o]))
+                    lb[i, o] = dist
+                    evaluated[i, o] = True
+                    thr = float(thr_o[o])
                     key = self.pair_names[i][o]
                     if self.obstacle_rows and (dist < thr or key in active):
+                        squared = self.form != "normalized"
                         out.append(
                             _Candidate(
                                 key,
                                 "obstacle",
-                                thr - dist
-                                if self.form == "normalized"
-                                else 0.5 * (thr * thr - dist * abs(dist)),
-                                thr if self.form == "normalized" else 0.5 * thr * thr,
+                                0.5 * (thr * thr - dist * abs(dist)) if squared else thr - dist,
+                                0.5 * thr * thr if squared else thr,
                                 (
                                     int(scene.link_joint[i]),
                                     dist,
@@ -370,19 +409,33 @@ class ConstraintSet:
                                     p_obs,
                                     normal,
                                     thr,
-                                    int(o),
+                                    o,
+                                    (i, o),
                                 ),
                             )
                         )
+                nearest = lb.argmin(axis=0)
+                todo = [
+                    (int(nearest[o]), o)
+                    for o in range(n_obs)
+                    if lb[nearest[o], o] < margin_o[o] and not evaluated[nearest[o], o]
+                ]
+                if not todo:
+                    break
+            nearest = lb.argmin(axis=0)
+            dist_o, link_o = self._dist_o, self._link_o
+            dist_o[:] = lb[nearest, self._obs_index]
+            link_o[:] = nearest
             self.min_distance = float(dist_o.min())
             better = np.less(dist_o, self.run_min, out=self._better)
             if better.any():
                 for o in np.flatnonzero(better):
                     self.run_min[o] = dist_o[o]
                     self.run_min_t[o] = tk
-                    self.run_min_link[o] = self.link_labels[link_o[o]] if link_o[o] >= 0 else ""
+                    self.run_min_link[o] = self.link_labels[link_o[o]]
+                    self.run_min_exact[o] = bool(evaluated[link_o[o], o])
         if scene.self_pairs:
-            pos, r = scene._joint_pos, scene.joint_radius
+            pos, r = scene.place_joints(data), scene.joint_radius
             a, b = self.self_slots
             gap = np.linalg.norm(pos[a] - pos[b], axis=1) - r[a] - r[b]
             close = np.flatnonzero(gap < self.self_threshold + self.monitor_margin)
@@ -428,7 +481,7 @@ class ConstraintSet:
                 self.joint_limits.row(c.payload, row)  # type: ignore[union-attr]
                 c.feed = 0.0
             elif c.kind == "obstacle":
-                joint, dist, p_link, p_obs, normal, thr, o = c.payload
+                joint, dist, p_link, p_obs, normal, thr, o, _ = c.payload
                 Jp = point_jacobian(model, data, joint, p_link)
                 c.error, c.feed = obstacle_row(
                     self.form, thr, dist, p_link, p_obs, normal, Jp, self.obs_vel[o], row
@@ -520,6 +573,9 @@ class ConstraintSet:
             }
             extra["min_obstacle_distance_link_by_obstacle"] = {
                 o.name: self.run_min_link[i] for i, o in enumerate(self.obstacles)
+            }
+            extra["min_obstacle_distance_exact_by_obstacle"] = {
+                o.name: self.run_min_exact[i] for i, o in enumerate(self.obstacles)
             }
             extra["min_obstacle_distance_time_by_obstacle"] = {
                 o.name: float(self.run_min_t[i]) for i, o in enumerate(self.obstacles)

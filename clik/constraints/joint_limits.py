@@ -86,6 +86,13 @@ class JointLimits:
         np.subtract(self._thr, e, out=e)
         return e
 
+    def slack(self, q: np.ndarray) -> float:
+        """How far [rad or m] the nearest joint is from entering its threshold band.
+
+        Negative or zero when some row's error is >= 0 (``-max e_q`` of eq. (17)).
+        """
+        return -float(self.evaluate(q).max())
+
     def row(self, i: int, out: np.ndarray) -> None:
         """Row ``u_q`` (19) of candidate ``i`` into ``out`` (nv,)."""
         out[:] = 0.0

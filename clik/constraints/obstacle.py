@@ -14,24 +14,31 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from clik.errors import GeometryError, InputError
+from clik.errors import GeometryError, InputError, native_message
 
 SHAPES = ("sphere", "box", "capsule", "cylinder", "mesh")
 
 
 def _vector3(value: Sequence[float] | np.ndarray, field: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=float).reshape(-1)
+    try:
+        arr = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(field, "three finite numbers", value) from None
     if arr.shape != (3,) or not np.all(np.isfinite(arr)):
         raise InputError(field, "three finite numbers", value)
     return arr
 
 
-def _nonnegative(value: float, field: str, strict: bool = False) -> float:
-    v = float(value)
-    if not np.isfinite(v) or v < 0.0 or (strict and v == 0.0):
+def _nonnegative(value: object, field: str, strict: bool = False) -> float:
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        v = float("nan")
+    if isinstance(value, bool) or not np.isfinite(v) or v < 0.0 or (strict and v == 0.0):
+        shown = v if isinstance(value, np.floating) else value  # 0.0, not np.float64(0.0)
         raise GeometryError(
             f"{field}: expected a {'positive' if strict else 'non-negative'} finite size [m], "
-            f"got {value!r}"
+            f"got {shown!r}"
         )
     return v
 
@@ -81,8 +88,15 @@ class Obstacle:
         self.position = _vector3(position, f"obstacles.{name}.position")
         self.rpy = _vector3(rpy, f"obstacles.{name}.rpy")
         self.velocity = _vector3(velocity, f"obstacles.{name}.velocity")
-        if threshold is not None and not (np.isfinite(threshold) and threshold > 0):
-            raise InputError(f"obstacles.{name}.threshold", "a positive distance [m]", threshold)
+        if threshold is not None:
+            try:
+                value = float(threshold)
+            except (TypeError, ValueError):
+                value = float("nan")
+            if isinstance(threshold, bool) or not (np.isfinite(value) and value > 0):
+                raise InputError(
+                    f"obstacles.{name}.threshold", "a positive distance [m]", threshold
+                )
         self.threshold = None if threshold is None else float(threshold)
         self.rotation = pin.rpy.rpyToMatrix(*self.rpy)
         self.params: dict[str, object] = {}
@@ -139,7 +153,9 @@ def _mesh_hull(file: object, scale: np.ndarray, where: str) -> tuple[coal.Convex
     try:
         mesh = coal.MeshLoader().load(str(path), scale)
     except Exception as exc:  # coal/assimp raise plain RuntimeErrors
-        raise GeometryError(f"{where}.file: cannot read mesh {path}: {exc}") from None
+        raise GeometryError(
+            f"{where}.file: cannot read mesh {path}: {native_message(exc)}"
+        ) from None
     return convex_hull(mesh, f"{where}.file")
 
 
@@ -156,6 +172,6 @@ def convex_hull(mesh: coal.BVHModelBase, field: str) -> tuple[coal.ConvexBase, f
     try:
         mesh.buildConvexHull(True, "Qt")
     except Exception as exc:
-        raise GeometryError(f"{field}: convex hull failed: {exc}") from None
+        raise GeometryError(f"{field}: convex hull failed: {native_message(exc)}") from None
     radius = float(np.max(np.linalg.norm(vertices, axis=1)))
     return mesh.convex, radius

@@ -15,9 +15,9 @@ import html
 import importlib.util
 import json
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from clik.result import atomic_write
 from clik.viz import palette
@@ -112,21 +112,28 @@ _LEGEND = (
 """Colour swatches of the caption."""
 
 
-def page(messages: list[bytes], title: str, caption: str = "") -> str:
+def page(
+    messages: list[bytes],
+    title: str,
+    caption: str = "",
+    legend: Sequence[tuple[Any, str]] | None = None,
+) -> str:
     """The HTML text of a scene from its packed commands.
 
     Args:
         messages: msgpack-packed viewer commands, applied in order.
         title: Page title.
         caption: Text shown at the bottom left (escaped here), followed by a legend.
+        legend: ``(colour, label)`` swatches (default: the tracking scene's).
     """
     encoded = [base64.b64encode(m).decode("ascii") for m in messages]
-    legend = "".join(
-        f'<span style="background:#{color_int(c):06x}"></span>{html.escape(n)}' for c, n in _LEGEND
+    swatches = "".join(
+        f'<span style="background:#{color_int(c):06x}"></span>{html.escape(n)}'
+        for c, n in (_LEGEND if legend is None else legend)
     )
     return _PAGE.format(
         title=html.escape(title),
-        caption=f"{html.escape(caption)}{legend}",
+        caption=f"{html.escape(caption)}{swatches}",
         viewer_js=VIEWER_JS.read_text(encoding="utf-8"),
         commands=json.dumps(encoded, separators=(",", ":")),
     )

@@ -28,6 +28,7 @@ from typing import Any
 
 import zmq
 
+from clik.errors import ClikError
 from clik.viz.commands import Command, pack
 
 LOOPBACK = "127.0.0.1"
@@ -40,8 +41,10 @@ REPLY_TIMEOUT_MS = 30_000
 """Longest wait for the server to acknowledge one command [ms]."""
 
 
-class ServerError(RuntimeError):
-    """The meshcat server could not be started or stopped answering."""
+class ServerError(ClikError, RuntimeError):
+    """The meshcat server could not be started or stopped answering (exit code 4)."""
+
+    exit_code = 4
 
 
 class MeshcatServer:

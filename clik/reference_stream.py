@@ -1,0 +1,67 @@
+"""The reference of a run, sampled chunk by chunk for the tracking loop.
+
+A trajectory is sampled vectorised over a block of the time grid at a time
+(:data:`REFERENCE_CHUNK` samples), so a 10^6-sample run holds a few hundred
+kilobytes of reference instead of hundreds of megabytes. Every chunk is
+sampled once before the loop starts, so a trajectory that yields NaN or lacks
+what the task needs is refused before any computation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from clik.errors import InputError
+from clik.task import Task
+from clik.trajectory import Reference, Trajectory
+
+REFERENCE_CHUNK = 4096
+"""Samples per chunk of reference."""
+
+Chunk = tuple[int, int, np.ndarray | None, np.ndarray | None, np.ndarray, np.ndarray]
+
+
+def task_reference(
+    task: Task, ref: Reference
+) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray]:
+    """Positions (N, 3), rotations (N, 3, 3) and the task rows' velocities (N, m)."""
+    P_d, R_d = ref.position, ref.rotation
+    if task.has_position and P_d is None:
+        raise InputError("trajectory", f"a position reference for the {task.kind} task")
+    if task.has_orientation and R_d is None:
+        raise InputError("trajectory", f"an orientation reference for the {task.kind} task")
+    V6 = np.zeros((ref.t.shape[0], 6))
+    if task.has_position:
+        V6[:, :3] = ref.linear_velocity
+    if task.has_orientation:
+        V6[:, 3:] = ref.angular_velocity
+    return P_d, R_d, np.ascontiguousarray(V6[:, task.rows])
+
+
+class ReferenceChunks:
+    """Chunks of a trajectory's reference on the time grid ``t``.
+
+    Args:
+        task: The task (which rows the reference must provide).
+        trajectory: The trajectory.
+        t: The run's time grid [s].
+        size: Samples per chunk.
+    """
+
+    def __init__(self, task: Task, trajectory: Trajectory, t: np.ndarray, size: int) -> None:
+        self.task, self.trajectory, self.t, self.size = task, trajectory, t, size
+        self._first = self._sample(0)
+        for c0 in range(size, t.shape[0], size):  # validate the rest before any step
+            self._sample(c0)
+
+    def _sample(self, c0: int) -> Chunk:
+        c1 = min(c0 + self.size, self.t.shape[0])
+        P_d, R_d, FF = task_reference(self.task, self.trajectory.sample(self.t[c0:c1]))
+        at_rest = ~np.any(FF != 0.0, axis=1)
+        return c0, c1, P_d, R_d, FF, at_rest
+
+    def load(self, c0: int) -> Chunk:
+        """The chunk starting at sample ``c0``: ``(c0, c1, P_d, R_d, FF, at_rest)``."""
+        if c0 == 0:
+            return self._first
+        return self._sample(c0)

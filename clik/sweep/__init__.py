@@ -1,0 +1,39 @@
+"""Parameter sweeps and reachability maps on Dask, from a laptop to a cluster.
+
+A *sweep* is a base scenario plus the keys to vary (:mod:`clik.sweep.spec`);
+it expands into runs with stable ids, which run as Dask tasks
+(:mod:`clik.sweep.execute`) on a local cluster or an existing one, each worker
+loading its robots once (:mod:`clik.sweep.worker`). One row per run is
+written as runs finish (:mod:`clik.sweep.store`); rerunning a sweep into the
+same folder computes only the runs missing there.
+
+A *reachability map* (:mod:`clik.sweep.reach`) solves single-pose IK
+(:func:`clik.solve`) over a grid of target points and writes success,
+iterations and manipulability ``sqrt(det(J J^T))`` per point, as a table and
+as a self-contained HTML view.
+"""
+
+from clik.sweep.bench import sweep_rate
+from clik.sweep.execute import SweepReport, dask_client, run_sweep
+from clik.sweep.reach import ReachMap, ReachSpec, reach_map
+from clik.sweep.spec import RunSpec, Sweep, Vary, load_sweep, parse_sweep, run_id
+from clik.sweep.store import ResultStore, SweepOutputExistsError, read_results
+
+__all__ = [
+    "ReachMap",
+    "ReachSpec",
+    "ResultStore",
+    "RunSpec",
+    "Sweep",
+    "SweepOutputExistsError",
+    "SweepReport",
+    "Vary",
+    "dask_client",
+    "load_sweep",
+    "parse_sweep",
+    "reach_map",
+    "read_results",
+    "run_id",
+    "run_sweep",
+    "sweep_rate",
+]

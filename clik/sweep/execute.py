@@ -1,0 +1,379 @@
+"""Run a sweep on Dask: an embedded local cluster, or an existing one by address.
+
+The client (this process) submits one Dask task per run, at most a window of
+them at a time, and writes each run's row as it comes back
+(:class:`~clik.sweep.store.ResultStore`), so results are on disk while the
+sweep goes on. Exactly-once writing is the client's job: it writes a run id
+only if it is not in the folder yet, whatever Dask does underneath.
+
+- A run that raises comes back as a row with ``status = "error"``.
+- A worker that dies: Dask reschedules its tasks (and recomputes results it
+  held but the client had not fetched) on the other workers. A task whose
+  workers died ``distributed.scheduler.allowed-failures`` times (default 3)
+  is recorded with ``status = "error"`` (``KilledWorker``).
+- An interruption (Ctrl-C): the tasks not started are cancelled, the ones
+  running are waited for (a second Ctrl-C stops at once), and every finished
+  row is written; running the same sweep into the same folder again computes
+  only the missing runs, so no run is computed twice.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from collections import Counter
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager, nullcontext
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from clik.errors import ClikError, InputError, ScenarioError
+from clik.sweep.progress import RunProgress
+from clik.sweep.spec import RunSpec, Sweep, load_sweep
+from clik.sweep.store import CSV, PARQUET, ResultStore, check_folder
+from clik.sweep.worker import run_one
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+FLUSH_SECONDS = 2.0
+"""Longest time a finished row waits in memory before it is written [s]."""
+
+FLUSH_ROWS = 256
+"""Most rows kept in memory before they are written."""
+
+
+@dataclass
+class SweepReport:
+    """What one call of :func:`run_sweep` did.
+
+    Attributes:
+        out: The output folder.
+        results: The results table (``results.parquet`` folder or ``results.csv``).
+        total: Runs in the sweep.
+        skipped: Runs already in the folder (resume), not computed again.
+        computed: Runs computed and written now.
+        lost: Runs neither written nor failed (cancelled by the cluster); a rerun computes them.
+        statuses: Status counts of the runs written now.
+        wall_time_s: From the first submission to the last write [s].
+        interrupted: The sweep was stopped before its end (Ctrl-C).
+    """
+
+    out: Path
+    results: Path
+    total: int
+    skipped: int
+    computed: int = 0
+    lost: int = 0
+    statuses: Counter[str] = field(default_factory=Counter)
+    wall_time_s: float = 0.0
+    interrupted: bool = False
+
+    @property
+    def rate(self) -> float:
+        """Runs computed per second [1/s]."""
+        return self.computed / self.wall_time_s if self.wall_time_s > 0 else 0.0
+
+    @property
+    def complete(self) -> bool:
+        """Every run of the sweep is in the folder."""
+        return self.skipped + self.computed == self.total
+
+
+def check_address(scheduler: str) -> str:
+    """A scheduler address ``tcp://HOST:PORT`` (also ``tls://``, ``ws://``...)."""
+    scheme, sep, rest = scheduler.partition("://")
+    host, colon, port = rest.rpartition(":")
+    if not sep or not scheme or not colon or not host or not port.isdigit():
+        raise InputError(
+            "--scheduler", "a Dask scheduler address like tcp://127.0.0.1:8786", scheduler
+        )
+    return scheduler
+
+
+@contextmanager
+def dask_client(workers: int | None = None, scheduler: str | None = None) -> Iterator[Client]:
+    """A Dask client: on the scheduler at ``scheduler``, else on a new local cluster.
+
+    The local cluster has ``workers`` worker processes (default: one per CPU),
+    one thread each, every server on 127.0.0.1 and no dashboard; it is closed
+    on exit. An existing cluster is left running.
+
+    Raises:
+        InputError: Both or a bad ``workers``/``scheduler``, or no scheduler answers.
+    """
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise ClikError(
+            "sweeps and reachability maps run on Dask: pip install 'dask[distributed]'"
+        ) from None
+    if scheduler is not None and workers is not None:
+        raise InputError("--workers", "either --workers or --scheduler, not both", workers)
+    if scheduler is not None:
+        check_address(scheduler)
+        try:
+            client = Client(scheduler, timeout="10s", set_as_default=False)
+        except (OSError, TimeoutError) as exc:
+            raise InputError(
+                "--scheduler", "the address of a running Dask scheduler", f"{scheduler} ({exc})"
+            ) from None
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    n = (os.cpu_count() or 1) if workers is None else workers
+    if not isinstance(n, int) or isinstance(n, bool) or n < 1:
+        raise InputError("--workers", "an integer >= 1", workers)
+    cluster = LocalCluster(
+        n_workers=n,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        scheduler_port=0,
+        dashboard_address=None,  # no dashboard; its HTTP server (health checks) on a free
+        scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},  # loopback port, not 8787
+        silence_logs=logging.ERROR,
+    )
+    try:
+        client = Client(cluster, set_as_default=False)
+        try:
+            yield client
+        finally:
+            client.close()
+    finally:
+        cluster.close()
+
+
+def manifest(sweep: Sweep) -> dict[str, Any]:
+    """The manifest written to ``DIR/sweep.json``."""
+    return {
+        "fingerprint": sweep.fingerprint,
+        "name": sweep.name,
+        "sweep_file": str(sweep.file.resolve()),
+        "base_file": str(sweep.base_file.resolve()),
+        "seed": sweep.seed,
+        "runs": len(sweep.runs),
+        "parameters": sweep.parameters,
+        "vary": {v.path: v.kind for v in sweep.vary},
+    }
+
+
+def check_first_run(sweep: Sweep, runs: list[RunSpec]) -> None:
+    """Build (not run) the first run here: a bad frame, joint or robot fails before any task."""
+    if not runs:
+        return
+    from clik.runner import build
+
+    build(sweep.scenario(runs[0]))
+
+
+def run_sweep(
+    sweep: Sweep | str | Path,
+    out: str | Path,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    client: Client | None = None,
+    keep_trajectories: bool = False,
+    force: bool = False,
+    fmt: str = "auto",
+    progress: bool | None = None,
+    on_row: Callable[[dict[str, Any]], None] | None = None,
+) -> SweepReport:
+    """Run every run of a sweep not yet in ``out``; write one row per run as they finish.
+
+    Args:
+        sweep: A :class:`~clik.sweep.spec.Sweep` or a sweep file.
+        out: The output folder (see :mod:`clik.sweep.store`). Rerunning the same
+            sweep into it resumes; another sweep needs ``force`` (which starts over).
+        workers: Processes of the local cluster (default: one per CPU).
+        scheduler: Address of an existing Dask scheduler instead, ``tcp://HOST:PORT``.
+        client: An existing :class:`distributed.Client` instead of both.
+        keep_trajectories: Also write ``DIR/runs/<run_id>/`` (summary, trajectory).
+        force: Start over in a folder holding something else.
+        fmt: ``"auto"`` (Parquet where pyarrow is installed), ``"parquet"`` or ``"csv"``.
+        progress: Draw the progress bar (default: when stderr is a terminal).
+        on_row: Called with each row after it is buffered (tests, notebooks).
+
+    Returns:
+        The report (counts, rate).
+
+    Raises:
+        ScenarioError: The sweep file, or its first run's scenario, is invalid.
+        SweepOutputExistsError: ``out`` holds something else and ``force`` is false.
+    """
+    if not isinstance(sweep, Sweep):
+        sweep = load_sweep(sweep)
+    out = Path(out)
+    try:
+        check_first_run(sweep, sweep.runs)
+    except ScenarioError as exc:
+        raise ScenarioError(sweep.file, "base", f"the first run cannot be built: {exc}") from None
+    values = {v.path: [r.params[v.path] for r in sweep.runs] for v in sweep.vary}
+
+    def open_store() -> ResultStore:
+        return ResultStore.open(out, manifest(sweep), values, force=force, fmt=fmt)
+
+    # Resuming: read what is there first (no cluster for a finished sweep). Else check the
+    # folder, connect, and only then create it (a bad --scheduler leaves nothing behind).
+    store = open_store() if check_folder(out, sweep.fingerprint, force) else None
+    todo = [r for r in sweep.runs if store is None or r.run_id not in store.ids]
+    report = SweepReport(
+        out, out / (PARQUET if fmt != "csv" else CSV), len(sweep.runs), len(sweep.runs) - len(todo)
+    )
+    if store is not None and not todo:
+        store.compact()
+        report.results = store.path
+        return report
+    bar = RunProgress(sweep.name, len(todo), enabled=progress)
+    with nullcontext(client) if client is not None else dask_client(workers, scheduler) as dask:
+        if store is None:
+            store = open_store()
+        report.results = store.path
+        _execute(dask, sweep, todo, store, report, bar, keep_trajectories, on_row)
+    if report.complete:
+        store.compact()
+    return report
+
+
+def _window(client: Client) -> int:
+    """Tasks kept submitted at once: enough to keep every worker thread busy."""
+    try:
+        threads = sum(client.nthreads().values())
+    except (OSError, ClikError):  # pragma: no cover
+        threads = 1
+    return max(32, 8 * max(threads, 1))
+
+
+def _execute(
+    client: Client,
+    sweep: Sweep,
+    todo: list[RunSpec],
+    store: ResultStore,
+    report: SweepReport,
+    bar: RunProgress,
+    keep_trajectories: bool,
+    on_row: Callable[[dict[str, Any]], None] | None,
+) -> None:
+    from distributed import as_completed
+
+    by_key: dict[str, RunSpec] = {}
+    base_file = str(sweep.base_file.resolve())
+    queue = iter(todo)
+
+    def submit() -> Any:
+        run = next(queue, None)
+        if run is None:
+            return None
+        key = f"clik-run-{sweep.fingerprint}-{run.run_id}"
+        by_key[key] = run
+        return client.submit(
+            run_one,
+            sweep.base_data,
+            base_file,
+            run.run_id,
+            run.params,
+            keep_trajectories,
+            key=key,
+            pure=False,
+            retries=0,
+        )
+
+    buffer: list[dict[str, Any]] = []
+    taken: set[str] = set()
+    last_flush = time.perf_counter()
+
+    def flush() -> None:
+        nonlocal last_flush
+        report.computed += store.append(buffer)
+        buffer.clear()
+        last_flush = time.perf_counter()
+
+    def take(future: Any) -> None:
+        run = by_key.pop(future.key, None)
+        if run is None or run.run_id in taken or run.run_id in store.ids:
+            return  # exactly once per id, whatever the cluster did
+        row = _row(future, run)
+        if row is None:
+            report.lost += 1
+            return
+        summary, trajectory = row.pop("_summary", None), row.pop("_trajectory_npz", None)
+        if summary is not None and trajectory is not None:
+            store.write_run_files(run.run_id, summary, trajectory)
+        taken.add(run.run_id)
+        buffer.append(row)
+        report.statuses[row["status"]] += 1
+        bar.update(1, failed=int(row["status"] == "error"))
+        if on_row is not None:
+            on_row(row)
+
+    start = time.perf_counter()
+    first = [f for f in (submit() for _ in range(_window(client))) if f is not None]
+    pending = as_completed(first, loop=client.loop)
+    try:
+        for future in pending:
+            take(future)
+            following = submit()
+            if following is not None:
+                pending.add(following)
+            due = time.perf_counter() - last_flush >= FLUSH_SECONDS
+            if len(buffer) >= FLUSH_ROWS or (buffer and due):
+                flush()
+    except KeyboardInterrupt:
+        report.interrupted = True
+        _drain(client, pending, take, bar)
+        raise
+    except BaseException:
+        report.interrupted = True
+        client.cancel(list(pending.futures))
+        raise
+    finally:
+        flush()
+        report.wall_time_s = time.perf_counter() - start
+        bar.close()
+
+
+def _drain(client: Client, pending: Any, take: Callable[[Any], None], bar: RunProgress) -> None:
+    """After Ctrl-C: cancel the runs not started, wait for the running ones and keep them.
+
+    Tasks already on a worker are finished and written (a few, at most
+    ``distributed.scheduler.worker-saturation`` per worker thread), so that no
+    computed run is lost and none is computed again on resume. A second
+    Ctrl-C stops at once (those runs are then computed again on resume).
+    """
+    from distributed import as_completed
+
+    outstanding = list(pending.futures)
+    try:
+        assigned = {k for keys in client.processing().values() for k in keys}
+    except Exception:  # pragma: no cover - an unreachable scheduler: keep nothing running
+        assigned = set()
+    done = [f for f in outstanding if f.status in ("finished", "error")]
+    running = [f for f in outstanding if f not in done and f.key in assigned]
+    client.cancel([f for f in outstanding if f not in done and f.key not in assigned])
+    bar.note(f"stopping: finishing the {len(running)} runs in progress (Ctrl-C again to stop now)")
+    try:
+        for _ in as_completed(running, loop=client.loop):
+            pass
+    finally:
+        for future in done + running:
+            if future.status in ("finished", "error"):
+                take(future)
+        client.cancel([f for f in running if f.status == "pending"])
+
+
+def _row(future: Any, run: RunSpec) -> dict[str, Any] | None:
+    """The row of a finished future; a failed task (e.g. ``KilledWorker``) is an error row."""
+    if future.status == "finished":
+        row = future.result()
+    elif future.status == "error":
+        exc = future.exception()
+        message = f"{type(exc).__name__}: {exc}"
+        row = {"run_id": run.run_id, "status": "error", "reason": message, "error": message}
+    else:  # cancelled (e.g. the scheduler restarted): not recorded, a rerun computes it
+        return None
+    return {"run_id": run.run_id, **run.params, **{k: v for k, v in row.items() if k != "run_id"}}

@@ -1,0 +1,117 @@
+"""`clik bench --quick`: the report's structure (keys, finite positive figures), never a time."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from clik.bench import REQUIRED_KEYS, run_bench
+
+HAS_PINK = importlib.util.find_spec("pink") is not None and (
+    importlib.util.find_spec("daqp") is not None or importlib.util.find_spec("quadprog") is not None
+)
+PINK_KEYS = {"step_us.pink_panda_pose", "solve.pink_median_us"}
+STEP_LINES = (
+    "planar4r",
+    "planar4r_case_study_both",
+    "panda_pose",
+    "panda_pose_transpose",
+    "panda_pose_obstacles",
+    "panda_pose_obstacles_0_active",
+    "panda_pose_obstacles_1_active",
+    "panda_pose_obstacles_transpose",
+)
+
+
+def lookup(report: dict[str, Any], dotted: str) -> Any:
+    node: Any = report
+    for part in dotted.split("."):
+        assert isinstance(node, dict) and part in node, f"bench.json lacks {dotted!r}"
+        node = node[part]
+    return node
+
+
+def positive(value: Any) -> bool:
+    return isinstance(value, int | float) and math.isfinite(value) and value > 0
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Any]]:
+    out = tmp_path_factory.mktemp("bench")
+    returned = run_bench(out, quick=True)
+    return out, returned
+
+
+def test_quick_run_writes_json_and_markdown(quick):
+    out, returned = quick
+    report = json.loads((out / "bench.json").read_text())
+    assert report == json.loads(json.dumps(returned))
+    assert report["quick"] is True
+    text = (out / "bench.md").read_text()
+    for heading in ("## Step cost", "## Single-pose solve", "## Case study", "## Targets"):
+        assert heading in text
+    for name in report["steps"]:
+        assert f"| {name} |" in text
+
+
+def test_every_required_key_is_present_and_sane(quick):
+    out, _ = quick
+    report = json.loads((out / "bench.json").read_text())
+    for key in REQUIRED_KEYS:
+        value = lookup(report, key)
+        if key in PINK_KEYS and not HAS_PINK:
+            assert value is None, key
+        elif key.startswith("memory_growth_mb"):
+            # Growth of the peak RSS: may be 0 for the quick run's few samples.
+            assert isinstance(value, int | float) and math.isfinite(value) and value >= 0, key
+        else:
+            assert positive(value), (key, value)
+    assert 0.0 <= report["solve"]["success_rate"] <= 1.0
+
+
+def test_step_lines_have_medians_and_percentiles(quick):
+    _, report = quick
+    for name in STEP_LINES:
+        assert positive(report["step_us"][name]), name
+    for name, line in report["steps"].items():
+        for field in ("median_us", "p10_us", "p90_us", "realtime_factor"):
+            assert positive(line[field]), (name, field)
+        assert line["p10_us"] <= line["median_us"] <= line["p90_us"], name
+        assert line["steps_per_run"] >= 1
+        assert line["status"] == "completed", (name, line["status"])
+    # The obstacle variants do what their names say.
+    assert report["steps"]["panda_pose_obstacles_0_active"]["active_rows_mean"] == 0.0
+    assert report["steps"]["panda_pose_obstacles_1_active"]["active_rows_mean"] > 0.5
+    assert ("pink_panda_pose" in report["steps"]) == HAS_PINK
+
+
+def test_case_study_memory_and_meta_sections(quick):
+    _, report = quick
+    case = report["case_study"]
+    assert set(case["per_run_s"]) == set(case["status"])
+    assert len(case["per_run_s"]) == 8
+    assert all(positive(v) for v in case["per_run_s"].values())
+    for mode in ("full", "decimated"):
+        mem = report["memory"][mode]
+        assert mem["status"] == "completed"
+        assert mem["samples"] == report["config"]["memory_samples"]
+    assert report["memory"]["decimated"]["recorded_samples"] < mem["samples"]
+    assert report["versions"]["clik"]
+    assert report["machine"]["cores"] >= 1
+    assert {t["name"] for t in report["targets"]} >= {"panda_pose [us]", "solve median [us]"}
+    for t in report["targets"]:
+        assert t["met"] in (True, False, None)
+
+
+@pytest.mark.skipif(not HAS_PINK, reason="pink not installed: pip install 'clik[bench]'")
+def test_pink_lines_and_ratios(quick):
+    _, report = quick
+    assert positive(report["ratios"]["pink_over_panda_pose"])
+    assert positive(report["ratios"]["pink_over_panda_pose_obstacles"])
+    assert 0.0 <= report["solve"]["pink_success_rate"] <= 1.0
+    assert report["pink"]["solver"] in ("daqp", "quadprog")

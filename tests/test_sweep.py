@@ -1,0 +1,697 @@
+"""Sweeps: expansion of sweep files, the results store, and runs on real Dask clusters.
+
+The cluster tests start real processes on 127.0.0.1 only (a scheduler and two
+workers, or ``clik sweep --workers 2``) and stop every one of them. Runs use a
+short case study (law (9), ``dt = 2 ms``, ``alpha = 500``: about 0.08 s each).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections import Counter
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from clik import ScenarioError
+from clik.cli import main
+from clik.demo import scenario_path
+from clik.runner import build
+from clik.sweep import keypath, load_sweep, read_results, run_id, run_sweep
+from clik.sweep.spec import tomllib
+from clik.sweep.store import ResultStore, SweepOutputExistsError, read_manifest
+from clik.sweep.worker import TRACE_ENV, robot_loads, run_one
+
+distributed = pytest.importorskip("distributed", reason="pip install 'dask[distributed]'")
+pytest.importorskip("pyarrow", reason="pip install pyarrow")
+
+PYTHON = sys.executable
+CLIK = [PYTHON, "-m", "clik.cli"]
+TIMEOUT = 90.0
+"""Longest wait for one cluster test's sweep [s] (it takes about 15 s)."""
+
+SHORT_CASE = (
+    scenario_path("case_study_both")
+    .read_text()
+    .replace("dt = 0.001", "dt = 0.002")
+    .replace("gain = 1000.0", "gain = 500.0")
+)
+"""The case study, both constraints, at half the samples: about 0.08 s a run."""
+
+
+def write(folder: Path, name: str, text: str) -> Path:
+    path = folder / name
+    path.write_text(text)
+    return path
+
+
+def obstacle_grid(nx: int, ny: int) -> str:
+    """A sweep of the pin's position over an nx-by-ny grid around the paper's (0.7, -0.28)."""
+    return (
+        'base = "short.toml"\n'
+        '[vary."obstacles.pin.position"]\n'
+        "grid = { start = [0.62, -0.34, 0.0], stop = [0.78, -0.22, 0.0], "
+        f"num = [{nx}, {ny}, 1] }}\n"
+    )
+
+
+@pytest.fixture
+def short_sweep(tmp_path: Path):
+    """A factory: (nx, ny) -> sweep file on the short case study, in tmp_path."""
+    write(tmp_path, "short.toml", SHORT_CASE)
+
+    def make(nx: int, ny: int, name: str = "sweep.toml") -> Path:
+        return write(tmp_path, name, obstacle_grid(nx, ny))
+
+    return make
+
+
+def sweep_text(vary: str, base: str = "case_study_both", head: str = "") -> str:
+    return f'base = "{base}"\n{head}\n{vary}'
+
+
+# -- expansion ------------------------------------------------------------------------
+
+
+def test_grid_values_and_product(tmp_path):
+    path = write(
+        tmp_path,
+        "s.toml",
+        sweep_text(
+            '[vary."obstacles.pin.position"]\n'
+            "grid = { start = [0.6, -0.3, 0.0], stop = [0.7, -0.2, 0.0], num = [3, 2, 1] }\n"
+            '[vary."solver.gain"]\nvalues = [500.0, 1000.0]\n'
+        ),
+    )
+    sweep = load_sweep(path)
+    assert len(sweep.runs) == 3 * 2 * 2
+    assert sweep.parameters == ["obstacles.pin.position", "solver.gain"]
+    positions = sweep.vary[0].values
+    assert positions == [
+        [0.6, -0.3, 0.0],
+        [0.6, -0.2, 0.0],
+        [0.65, -0.3, 0.0],
+        [0.65, -0.2, 0.0],
+        [0.7, -0.3, 0.0],
+        [0.7, -0.2, 0.0],
+    ]  # 12 significant digits: 0.65, not 0.6499999999999999
+    # A product, the first table varying slowest.
+    assert [r.params["solver.gain"] for r in sweep.runs[:4]] == [500.0, 1000.0, 500.0, 1000.0]
+    assert sweep.runs[2].params["obstacles.pin.position"] == [0.6, -0.2, 0.0]
+    assert len({r.run_id for r in sweep.runs}) == len(sweep.runs)
+    # The run's scenario is the base with the values substituted.
+    scenario = sweep.scenario(sweep.runs[7])
+    assert scenario.obstacles[0]["position"] == [0.65, -0.2, 0.0]
+    assert scenario.solver["gain"] == 1000.0
+    assert scenario.file == scenario_path("case_study_both")
+
+
+def test_scalar_grid_keeps_integers(tmp_path):
+    path = write(
+        tmp_path,
+        "s.toml",
+        sweep_text('[vary."solver.record_every"]\ngrid = { start = 1, stop = 5, num = 3 }\n'),
+    )
+    assert load_sweep(path).vary[0].values == [1, 3, 5]
+
+
+def test_uniform_tables_vary_jointly_and_reproducibly(tmp_path):
+    vary = (
+        '[vary."obstacles.pin.position"]\n'
+        "uniform = { low = [0.65, -0.3, 0.0], high = [0.75, -0.26, 0.0], samples = 7 }\n"
+        '[vary."solver.gain"]\nuniform = { low = 400.0, high = 900.0, samples = 7 }\n'
+        '[vary."solver.law"]\nvalues = ["transpose", "pseudoinverse"]\n'
+    )
+    sweep = load_sweep(write(tmp_path, "a.toml", sweep_text(vary, head="seed = 3")))
+    assert len(sweep.runs) == 2 * 7  # the list times the joint uniform block
+    positions = np.array(sweep.vary[0].values)
+    assert positions.shape == (7, 3)
+    assert np.all(positions >= [0.65, -0.3, 0.0]) and np.all(positions <= [0.75, -0.26, 0.0])
+    gains = sweep.vary[1].values
+    assert all(400.0 <= g <= 900.0 for g in gains)
+    # Jointly: sample i of each table in the same run.
+    first = [r for r in sweep.runs if r.params["solver.law"] == "transpose"]
+    assert [r.params["solver.gain"] for r in first] == gains
+    assert [r.params["obstacles.pin.position"] for r in first] == sweep.vary[0].values
+    # Seeded: the same file gives the same samples; another seed, others.
+    again = load_sweep(write(tmp_path, "b.toml", sweep_text(vary, head="seed = 3")))
+    assert [r.run_id for r in again.runs] == [r.run_id for r in sweep.runs]
+    other = load_sweep(write(tmp_path, "c.toml", sweep_text(vary, head="seed = 4")))
+    assert other.vary[1].values != gains
+    # A table's samples do not depend on the other tables.
+    alone = load_sweep(
+        write(
+            tmp_path,
+            "d.toml",
+            sweep_text(
+                '[vary."solver.gain"]\nuniform = { low = 400.0, high = 900.0, samples = 7 }\n',
+                head="seed = 3",
+            ),
+        )
+    )
+    assert alone.vary[0].values == gains
+
+
+def test_run_ids_are_stable_hashes_of_the_parameters():
+    params = {"obstacles.pin.position": [0.7, -0.28, 0.0], "solver.gain": 1000.0}
+    assert run_id(params) == run_id(dict(reversed(params.items())))
+    assert run_id(params) == run_id(json.loads(json.dumps(params)))  # survives JSON
+    assert run_id(params) != run_id({**params, "solver.gain": 1000.5})
+    assert len(run_id(params)) == 16 and int(run_id(params), 16) >= 0
+    assert run_id({"solver.gain": 1.0}) == "0e68160686de389b"  # pinned: ids name results on disk
+
+
+def test_base_relative_to_the_sweep_file(tmp_path):
+    (tmp_path / "cases").mkdir()
+    write(tmp_path / "cases", "mine.toml", SHORT_CASE)
+    sweep = load_sweep(
+        write(
+            tmp_path,
+            "s.toml",
+            sweep_text('[vary."solver.gain"]\nvalues = [1.0]', "cases/mine.toml"),
+        )
+    )
+    assert sweep.base_file == tmp_path / "cases" / "mine.toml"
+    shipped = load_sweep(
+        write(
+            tmp_path,
+            "t.toml",
+            sweep_text('[vary."solver.gain"]\nvalues = [1.0]', "panda_circle.toml"),
+        )
+    )
+    assert shipped.base_file == scenario_path("panda_circle")
+
+
+def test_keys_the_base_lacks_and_whole_tables(tmp_path):
+    sweep = load_sweep(
+        write(
+            tmp_path,
+            "s.toml",
+            sweep_text(
+                '[vary."solver.damping"]\nvalues = [0.0, 0.01]\n'
+                '[vary."constraints.joint_limits.override.joint2.lower"]\nvalues = [-60.0]\n'
+                '[vary."trajectory"]\nvalues = [{ kind = "hold", duration = 0.5 }]\n'
+            ),
+        )
+    )
+    scenario = sweep.scenario(sweep.runs[1])
+    assert scenario.solver["damping"] == 0.01
+    assert scenario.trajectory["kind"] == "hold"
+    assert scenario.constraints["joint_limits"]["override"]["joint2"]["lower"] == pytest.approx(
+        np.radians(-60.0)
+    )
+
+
+@pytest.mark.parametrize(
+    ("vary", "key", "message"),
+    [
+        (
+            '[vary."obstacles.pin.postion"]\nvalues = [[0.7, -0.28, 0.0]]',
+            'vary."obstacles.pin.postion"',
+            "unknown key path; valid key paths of case_study_both.toml: name, robot.source, "
+            "initial.q,",
+        ),
+        (
+            '[vary."solver.gian"]\nvalues = [1.0]',
+            'vary."solver.gian"',
+            "unknown key path; valid key paths",
+        ),
+        (
+            '[vary."obstacles.peg.position"]\nvalues = [[0.7, -0.28, 0.0]]',
+            'vary."obstacles.peg.position"',
+            "no obstacle named 'peg'; obstacles: ['pin']",
+        ),
+        (
+            '[vary."solver.gain.x"]\nvalues = [1.0]',
+            'vary."solver.gain.x"',
+            "solver.gain is a value, not a table",
+        ),
+        (
+            '[vary."solver..gain"]\nvalues = [1.0]',
+            'vary."solver..gain"',
+            "expected dot-separated key names",
+        ),
+        (
+            '[vary."solver.gain"]\nvalues = [100.0, -1.0]',
+            'vary."solver.gain"',
+            "the run with solver.gain = -1.0 is not a valid scenario: solver.gain: expected a "
+            "number > 0 [1/s], got -1.0",
+        ),
+        (
+            '[vary."obstacles.pin.radius"]\nvalues = [-0.1]',
+            'vary."obstacles.pin.radius"',
+            "obstacles.pin.radius: expected a number >= 0 [m]",
+        ),
+        (
+            '[vary."solver.gain"]\nvalues = []',
+            'vary."solver.gain".values',
+            "expected a non-empty list of values",
+        ),
+        (
+            '[vary."solver.gain"]\nvalues = [1.0]\ngrid = { start = 1, stop = 2, num = 2 }',
+            'vary."solver.gain"',
+            "expected exactly one of values, grid, uniform, got ['values', 'grid']",
+        ),
+        (
+            '[vary."solver.gain"]\ngrid = { start = 1.0, stop = 2.0 }',
+            'vary."solver.gain".grid.num',
+            "required key is missing",
+        ),
+        (
+            '[vary."solver.gain"]\ngrid = { start = [1.0], stop = 2.0, num = 2 }',
+            'vary."solver.gain".grid.stop',
+            "expected the same shape as start (1 numbers)",
+        ),
+        (
+            '[vary."solver.gain"]\ngrid = { start = 1.0, stop = 2.0, num = 0 }',
+            'vary."solver.gain".grid.num',
+            "expected an integer >= 1",
+        ),
+        (
+            '[vary."solver.gain"]\nuniform = { low = 2.0, high = 1.0, samples = 3 }',
+            'vary."solver.gain".uniform.high',
+            "expected values >= low",
+        ),
+        (
+            '[vary."solver.gain"]\nuniform = { low = 1.0, high = 2.0, samples = 3 }\n'
+            '[vary."solver.dt"]\nuniform = { low = 1e-3, high = 2e-3, samples = 4 }',
+            "vary",
+            'uniform tables vary jointly: expected equal samples, got "solver.gain": 3, '
+            '"solver.dt": 4',
+        ),
+        (
+            '[vary."solver.gain"]\nvalues = [1.0]\nsteps = 3',
+            'vary."solver.gain".steps',
+            "unknown key; valid keys here: values",
+        ),
+        (
+            '[vary."solver.gain"]\ngrid = { start = 1.0, stop = 2.0, num = 1001 }\n'
+            '[vary."solver.dt"]\ngrid = { start = 1e-3, stop = 2e-3, num = 1001 }',
+            "vary",
+            "expected at most 1000000 runs, got 1002001",
+        ),
+    ],
+)
+def test_bad_sweep_files_name_the_file_and_key_path(tmp_path, vary, key, message):
+    path = write(tmp_path, "bad.toml", sweep_text(vary))
+    with pytest.raises(ScenarioError) as info:
+        load_sweep(path)
+    assert info.value.file == str(path)
+    assert info.value.key == key
+    assert message in info.value.expected
+
+
+def test_bad_top_level(tmp_path):
+    with pytest.raises(ScenarioError, match=r"base: no scenario file .* and no shipped scenario"):
+        load_sweep(
+            write(tmp_path, "a.toml", sweep_text('[vary."solver.gain"]\nvalues = [1.0]', "x"))
+        )
+    with pytest.raises(ScenarioError, match=r"vary: required key is missing"):
+        load_sweep(write(tmp_path, "b.toml", 'base = "case_study_both"\n'))
+    with pytest.raises(ScenarioError, match=r"vary: expected at least one"):
+        load_sweep(write(tmp_path, "c.toml", 'base = "case_study_both"\n[vary]\n'))
+    with pytest.raises(ScenarioError, match=r"repeat: unknown key; valid keys here: base, name"):
+        load_sweep(
+            write(
+                tmp_path,
+                "d.toml",
+                sweep_text('[vary."solver.gain"]\nvalues = [1.0]', head="repeat = 2"),
+            )
+        )
+    with pytest.raises(ScenarioError, match="no such sweep file"):
+        load_sweep(tmp_path / "missing.toml")
+    # The base's own errors name the base file.
+    write(tmp_path, "broken.toml", SHORT_CASE.replace("dt = 0.002", "dt = -1.0"))
+    with pytest.raises(ScenarioError) as info:
+        load_sweep(
+            write(
+                tmp_path,
+                "e.toml",
+                sweep_text('[vary."solver.gain"]\nvalues = [1.0]', "broken.toml"),
+            )
+        )
+    assert info.value.file == str(tmp_path / "broken.toml") and info.value.key == "solver.dt"
+
+
+def test_keypath_get_substitute_leaves():
+    data = tomllib.loads(scenario_path("case_study_both").read_text())
+    assert keypath.get(data, "obstacles.pin.position") == [0.7, -0.28, 0.0]
+    assert keypath.get(data, "constraints.joint_limits.override.joint3.upper") == -80.0
+    changed = keypath.substitute(data, {"obstacles.pin.position": [0.0, 0.0, 0.0]})
+    assert changed["obstacles"][0]["position"] == [0.0, 0.0, 0.0]
+    assert data["obstacles"][0]["position"] == [0.7, -0.28, 0.0]  # a copy
+    assert "obstacles.pin.radius" in keypath.leaves(data)
+    assert keypath.from_scenario_key(data, "obstacles[0].radius") == "obstacles.pin.radius"
+    with pytest.raises(keypath.KeyPathError, match="not in the base scenario"):
+        keypath.get(data, "solver.damping")
+
+
+# -- one run on a worker, in this process ---------------------------------------------------
+
+
+def test_run_one_matches_the_api_and_loads_the_robot_once(tmp_path):
+    path = write(tmp_path, "short.toml", SHORT_CASE)
+    sweep = load_sweep(
+        write(tmp_path, "s.toml", obstacle_grid(2, 1).replace("short.toml", str(path)))
+    )
+    before = robot_loads()
+    rows = [run_one(sweep.base_data, str(sweep.base_file), r.run_id, r.params) for r in sweep.runs]
+    assert robot_loads() - before <= 1  # cached per worker thread (0 if cached already)
+    api = build(sweep.scenario(sweep.runs[1])).execute()
+    assert rows[1]["status"] == api.status == "completed"
+    assert rows[1]["steps"] == api.steps
+    assert rows[1]["max_task_error"] == pytest.approx(api.max_task_error, rel=1e-12)
+    assert rows[1]["min_obstacle_distance"] == pytest.approx(
+        float(np.min(api.min_obstacle_distance)), rel=1e-12
+    )
+    assert rows[0]["run_id"] == sweep.runs[0].run_id and rows[0]["error"] is None
+
+
+def test_a_run_that_raises_is_a_row(tmp_path):
+    data = tomllib.loads(SHORT_CASE)
+    row = run_one(data, str(tmp_path / "short.toml"), "x", {"task.frame": "nope"})
+    assert row["status"] == "error"
+    assert "frame 'nope' not found" in row["error"] and row["reason"].startswith("ScenarioError")
+
+
+# -- the store -------------------------------------------------------------------------------
+
+
+def _manifest(fingerprint: str = "f1") -> dict:
+    return {"fingerprint": fingerprint, "parameters": ["a.b", "c"]}
+
+
+def _row(i: int) -> dict:
+    return {
+        "run_id": f"id{i}",
+        "a.b": [float(i), 1.0],
+        "c": "x",
+        "status": "completed",
+        "steps": i,
+        "joint_min": [0.0, 1.0],
+        "min_obstacle_distance": None,
+    }
+
+
+@pytest.mark.parametrize("fmt", ["parquet", "csv"])
+def test_store_appends_resumes_and_writes_each_id_once(tmp_path, fmt):
+    out = tmp_path / "out"
+    values = {"a.b": [[0.0, 1.0]], "c": ["x"]}
+    store = ResultStore.open(out, _manifest(), values, fmt=fmt)
+    assert store.append([_row(0), _row(1)]) == 2
+    assert store.append([_row(1), _row(2)]) == 1  # id1 is there already
+    again = ResultStore.open(out, _manifest(), values, fmt="auto")
+    assert again.fmt == fmt and again.ids == {"id0", "id1", "id2"}
+    assert again.append([_row(2)]) == 0
+    again.compact()
+    rows = read_results(out)
+    assert [r["run_id"] for r in rows] == ["id0", "id1", "id2"]
+    assert rows[2]["a.b"] == [2.0, 1.0] and rows[2]["c"] == "x" and rows[2]["steps"] == 2
+    assert rows[0]["joint_min"] == [0.0, 1.0] and rows[0]["min_obstacle_distance"] is None
+    assert read_manifest(out)["format"] == fmt
+    # Another sweep into the same folder needs force, which starts over.
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(SweepOutputExistsError, match="holds the results of another sweep"):
+        ResultStore.open(out, _manifest("f2"), values)
+    fresh = ResultStore.open(out, _manifest("f2"), values, force=True)
+    assert fresh.ids == set() and (out / "notes.txt").read_text() == "mine"
+
+
+def test_store_parquet_is_a_dataset_folder_and_survives_an_interrupted_compaction(tmp_path):
+    import pyarrow.parquet as pq
+
+    out = tmp_path / "out"
+    values = {"a.b": [[0.0, 1.0]], "c": ["x"]}
+    store = ResultStore.open(out, _manifest(), values, fmt="parquet")
+    for i in range(3):
+        store.append([_row(i)])
+    assert len(list((out / "results.parquet").glob("part-*.parquet"))) == 3
+    assert pq.read_table(out / "results.parquet").num_rows == 3  # any reader sees one table
+    # A compaction that wrote its file but died before deleting the parts: duplicates.
+    table = pq.read_table(out / "results.parquet")
+    pq.write_table(table, out / "results.parquet" / "part-000009-deadbeef.parquet")
+    assert [r["run_id"] for r in read_results(out)] == ["id0", "id1", "id2"]
+    ResultStore.open(out, _manifest(), values)  # reopening finishes the compaction
+    assert len(list((out / "results.parquet").glob("part-*.parquet"))) == 1
+    assert pq.read_table(out / "results.parquet").num_rows == 3
+
+
+def test_store_csv_cuts_a_partial_last_line(tmp_path):
+    out = tmp_path / "out"
+    values = {"a.b": [[0.0, 1.0]], "c": ["x"]}
+    store = ResultStore.open(out, _manifest(), values, fmt="csv")
+    store.append([_row(0)])
+    with open(out / "results.csv", "a") as f:
+        f.write('id9,"[9.0, 1.0]",')  # a crash in the middle of a row
+    reopened = ResultStore.open(out, _manifest(), values)
+    assert reopened.ids == {"id0"}
+    reopened.append([_row(1)])
+    assert [r["run_id"] for r in read_results(out)] == ["id0", "id1"]
+
+
+def test_non_empty_folder_needs_force(tmp_path, short_sweep, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine")
+    code = main(["sweep", str(short_sweep(2, 1)), "--out", str(out), "--workers", "1", "--quiet"])
+    assert code == 2
+    assert "exists already and holds no sweep results" in capsys.readouterr().err
+
+
+def test_cli_names_the_bad_key_path(tmp_path, capsys):
+    path = write(tmp_path, "bad.toml", sweep_text('[vary."solver.gian"]\nvalues = [1.0]'))
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert f'{path}: vary."solver.gian": unknown key path; valid key paths' in err
+    assert not (tmp_path / "out").exists()
+
+
+# -- a local cluster in this process ----------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def local_client():
+    from clik.sweep.execute import dask_client
+
+    with dask_client(workers=2) as client:
+        client.wait_for_workers(2, timeout=60)
+        yield client
+
+
+def test_local_cluster_sweep_with_trajectories_errors_and_csv(tmp_path, local_client):
+    write(tmp_path, "short.toml", SHORT_CASE)
+    path = write(
+        tmp_path,
+        "s.toml",
+        'base = "short.toml"\n[vary."obstacles.pin.position"]\n'
+        "values = [[0.7, -0.28, 0.0], [0.66, -0.3, 0.0]]\n"
+        '[vary."trajectory.goal"]\nvalues = [[0.8, -0.2, 0.0], [9.0, 0.0, 0.0]]\n',
+    )
+    out = tmp_path / "out"
+    report = run_sweep(path, out, client=local_client, keep_trajectories=True, fmt="csv")
+    assert report.complete and report.computed == 4 and report.skipped == 0
+    rows = {
+        (tuple(r["obstacles.pin.position"]), tuple(r["trajectory.goal"])): r
+        for r in read_results(out)
+    }
+    assert len(rows) == 4 and (out / "results.csv").is_file()
+    bad = rows[(0.7, -0.28, 0.0), (9.0, 0.0, 0.0)]
+    assert bad["status"] == "error" and "trajectory" in bad["error"]  # recorded, sweep went on
+    good = rows[(0.7, -0.28, 0.0), (0.8, -0.2, 0.0)]
+    assert good["status"] == "completed" and good["error"] is None
+    folder = out / "runs" / good["run_id"]
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["max_task_error"] == pytest.approx(good["max_task_error"], rel=1e-12)
+    with np.load(folder / "trajectory.npz") as npz:
+        assert npz["q"].shape == (good["steps"], 4)
+    assert not (out / "runs" / bad["run_id"]).exists()
+    # Everything is there: a rerun computes nothing and starts no task.
+    again = run_sweep(path, out, client=local_client)
+    assert again.skipped == 4 and again.computed == 0
+
+
+def test_workers_load_the_robot_once(tmp_path, short_sweep, local_client):
+    report = run_sweep(short_sweep(4, 3), tmp_path / "out", client=local_client)
+    assert report.computed == 12
+    loads = local_client.run(robot_loads)
+    assert set(loads.values()) <= {0, 1}, loads  # one robot per worker, whatever the runs
+
+
+# -- real processes: a scheduler and workers, and the CLI --------------------------------------
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def stop(process: subprocess.Popen) -> None:
+    """Stop a process started with its own session, and anything it started."""
+    if process.poll() is None:
+        try:
+            os.killpg(process.pid, signal.SIGTERM)
+            process.wait(timeout=10)
+        except (ProcessLookupError, subprocess.TimeoutExpired):
+            pass
+    try:
+        os.killpg(process.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    process.wait(timeout=10)
+
+
+@contextmanager
+def dask_processes(workers: int, env: dict[str, str]) -> Iterator[tuple[str, list]]:
+    """A ``dask scheduler`` and ``workers`` ``dask worker`` processes on 127.0.0.1."""
+    port = free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    started: list[subprocess.Popen] = []
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "start_new_session": True}
+    try:
+        started.append(
+            subprocess.Popen(
+                [
+                    PYTHON,
+                    "-m",
+                    "distributed.cli.dask_scheduler",
+                    *f"--host 127.0.0.1 --port {port} --no-dashboard".split(),
+                ],
+                env=env,
+                **quiet,
+            )
+        )
+        for i in range(workers):
+            started.append(
+                subprocess.Popen(
+                    [
+                        PYTHON,
+                        "-m",
+                        "distributed.cli.dask_worker",
+                        address,
+                        *"--host 127.0.0.1 --nworkers 1 --nthreads 1 --no-nanny --no-dashboard"
+                        " --death-timeout 60".split(),
+                        "--name",
+                        f"w{i}",
+                    ],
+                    env=env,
+                    **quiet,
+                )
+            )
+        with distributed.Client(address, timeout="30s", set_as_default=False) as client:
+            client.wait_for_workers(workers, timeout=60)
+        yield address, started[1:]
+    finally:
+        for process in reversed(started):
+            stop(process)
+
+
+def traced(folder: Path) -> Counter:
+    """Run ids computed, with how many times (the workers' CLIK_SWEEP_TRACE logs)."""
+    ids: Counter = Counter()
+    for log in folder.glob("*.log"):
+        ids.update(log.read_text().split())
+    return ids
+
+
+def wait_until(condition, timeout: float, process: subprocess.Popen | None = None) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if process is not None and process.poll() is not None:
+            raise AssertionError(f"the sweep ended early ({process.returncode})")
+        if time.monotonic() > deadline:
+            raise AssertionError("timed out")
+        time.sleep(0.05)
+
+
+def env_with(**extra: str) -> dict[str, str]:
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    env.update(extra)
+    return env
+
+
+@pytest.mark.slow
+def test_a_dead_worker_loses_no_run(tmp_path, short_sweep):
+    """200 runs on a scheduler and two workers; one worker is killed midway."""
+    sweep = short_sweep(20, 10)
+    out, trace = tmp_path / "out", tmp_path / "trace"
+    env = env_with(**{TRACE_ENV: str(trace)})
+    with dask_processes(2, env) as (address, workers):
+        cli = subprocess.Popen(
+            [*CLIK, "sweep", str(sweep), "--out", str(out), "--scheduler", address, "--quiet"],
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            start_new_session=True,
+        )
+        try:
+            wait_until(lambda: sum(traced(trace).values()) >= 60, TIMEOUT, cli)
+            workers[0].send_signal(signal.SIGKILL)  # no nanny: the worker is gone
+            workers[0].wait(timeout=10)
+            _, err = cli.communicate(timeout=TIMEOUT)
+        finally:
+            stop(cli)
+        assert cli.returncode == 0, err.decode()
+    expected = {r.run_id for r in load_sweep(sweep).runs}
+    rows = read_results(out)
+    ids = Counter(r["run_id"] for r in rows)
+    assert set(ids) == expected and len(expected) == 200
+    assert max(ids.values()) == 1  # exactly once
+    import pyarrow.parquet as pq
+
+    raw = pq.read_table(out / "results.parquet").column("run_id").to_pylist()
+    assert sorted(raw) == sorted(expected)  # on disk too, after the compaction
+    statuses = Counter(r["status"] for r in rows)
+    assert statuses["error"] == 0, statuses
+    assert len({r["worker"] for r in rows}) == 2  # both workers wrote rows before the kill
+    computed = traced(trace)
+    assert set(computed) == expected  # and each run was computed at least once
+
+
+@pytest.mark.slow
+def test_an_interrupted_sweep_resumes_without_computing_a_run_twice(tmp_path, short_sweep):
+    """Ctrl-C a `clik sweep --workers 2` once rows are on disk; rerun; count computations."""
+    sweep = short_sweep(10, 8)
+    out, first, second = tmp_path / "out", tmp_path / "trace1", tmp_path / "trace2"
+    command = [*CLIK, "sweep", str(sweep), "--out", str(out), "--workers", "2", "--quiet"]
+    cli = subprocess.Popen(
+        command,
+        env=env_with(**{TRACE_ENV: str(first)}),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
+    try:
+        parts = out / "results.parquet"
+        wait_until(lambda: parts.is_dir() and any(parts.glob("part-*.parquet")), TIMEOUT, cli)
+        cli.send_signal(signal.SIGINT)  # the CLI only, as a terminal's Ctrl-C would
+        _, err = cli.communicate(timeout=60)
+    finally:
+        stop(cli)
+    assert cli.returncode == 130, err.decode()
+    assert "run the same command again" in err.decode()
+    expected = {r.run_id for r in load_sweep(sweep).runs}
+    kept = {r["run_id"] for r in read_results(out)}
+    assert 0 < len(kept) < len(expected)
+    assert kept <= set(traced(first))
+
+    rerun = subprocess.run(
+        command, env=env_with(**{TRACE_ENV: str(second)}), capture_output=True, timeout=TIMEOUT
+    )
+    assert rerun.returncode == 0, rerun.stderr.decode()
+    again = traced(second)
+    assert not kept & set(again)  # nothing written before was computed again
+    assert set(again) == expected - kept and max(again.values()) == 1  # the others, once each
+    ids = Counter(r["run_id"] for r in read_results(out))
+    assert set(ids) == expected and max(ids.values()) == 1
+    # The first session finished its running runs before it stopped: all it computed is kept.
+    assert set(traced(first)) == kept and max(traced(first).values()) == 1
