@@ -11,9 +11,9 @@ only if it is not in the folder yet, whatever Dask does underneath.
   held but the client had not fetched) on the other workers. A task whose
   workers died ``distributed.scheduler.allowed-failures`` times (default 3)
   is recorded with ``status = "error"`` (``KilledWorker``).
-- An interruption (Ctrl-C): the tasks not started are cancelled, the ones
-  running are waited for (a second Ctrl-C stops at once), and every finished
-  row is written; running the same sweep into the same folder again computes
+- An interruption (Ctrl-C): no more runs are submitted, the ones submitted
+  (at most two per worker thread) are finished and written (a second Ctrl-C
+  stops at once); running the same sweep into the same folder again computes
   only the missing runs, so no run is computed twice.
 """
 
@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import logging
 import os
+import signal
+import threading
 import time
 from collections import Counter
 from collections.abc import Callable, Iterator
@@ -246,7 +248,7 @@ def _window(client: Client) -> int:
         threads = sum(client.nthreads().values())
     except (OSError, ClikError):  # pragma: no cover
         threads = 1
-    return max(32, 8 * max(threads, 1))
+    return 2 * max(threads, 1)  # one running and one queued per thread: a short Ctrl-C drain
 
 
 def _execute(
@@ -312,58 +314,44 @@ def _execute(
             on_row(row)
 
     start = time.perf_counter()
+    stopping = threading.Event()
+
+    def on_sigint(signum: int, frame: Any) -> None:
+        if stopping.is_set():  # a second Ctrl-C: stop now
+            raise KeyboardInterrupt
+        stopping.set()
+        bar.note("stopping: finishing the runs submitted (Ctrl-C again to stop now)")
+
+    # The first Ctrl-C only sets a flag: the loop stops submitting, and every run already
+    # submitted (at most two per worker thread) is finished and written, so none is
+    # computed and then lost (and computed again on resume).
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, on_sigint) if main else None
     first = [f for f in (submit() for _ in range(_window(client))) if f is not None]
     pending = as_completed(first, loop=client.loop)
     try:
         for future in pending:
             take(future)
-            following = submit()
-            if following is not None:
-                pending.add(following)
+            if not stopping.is_set():
+                following = submit()
+                if following is not None:
+                    pending.add(following)
             due = time.perf_counter() - last_flush >= FLUSH_SECONDS
             if len(buffer) >= FLUSH_ROWS or (buffer and due):
                 flush()
-    except KeyboardInterrupt:
-        report.interrupted = True
-        _drain(client, pending, take, bar)
-        raise
+        if stopping.is_set():
+            report.interrupted = True
+            raise KeyboardInterrupt
     except BaseException:
         report.interrupted = True
         client.cancel(list(pending.futures))
         raise
     finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
         flush()
         report.wall_time_s = time.perf_counter() - start
         bar.close()
-
-
-def _drain(client: Client, pending: Any, take: Callable[[Any], None], bar: RunProgress) -> None:
-    """After Ctrl-C: cancel the runs not started, wait for the running ones and keep them.
-
-    Tasks already on a worker are finished and written (a few, at most
-    ``distributed.scheduler.worker-saturation`` per worker thread), so that no
-    computed run is lost and none is computed again on resume. A second
-    Ctrl-C stops at once (those runs are then computed again on resume).
-    """
-    from distributed import as_completed
-
-    outstanding = list(pending.futures)
-    try:
-        assigned = {k for keys in client.processing().values() for k in keys}
-    except Exception:  # pragma: no cover - an unreachable scheduler: keep nothing running
-        assigned = set()
-    done = [f for f in outstanding if f.status in ("finished", "error")]
-    running = [f for f in outstanding if f not in done and f.key in assigned]
-    client.cancel([f for f in outstanding if f not in done and f.key not in assigned])
-    bar.note(f"stopping: finishing the {len(running)} runs in progress (Ctrl-C again to stop now)")
-    try:
-        for _ in as_completed(running, loop=client.loop):
-            pass
-    finally:
-        for future in done + running:
-            if future.status in ("finished", "error"):
-                take(future)
-        client.cancel([f for f in running if f.status == "pending"])
 
 
 def _row(future: Any, run: RunSpec) -> dict[str, Any] | None:
