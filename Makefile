@@ -19,7 +19,7 @@ $(VENV)/.installed: $(PY) pyproject.toml
 	touch $@
 
 $(VENV)/.installed-test: $(PY) pyproject.toml
-	$(PIP) install --quiet -e ".[test,notebooks]"
+	$(PIP) install --quiet -e ".[test,notebooks,bench]"
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed

@@ -74,6 +74,8 @@ class BenchConfig:
         case_study_rounds: Repeats of the eight case-study runs.
         memory_samples: Samples of the planar run whose peak RSS is measured.
         memory_record_every: Decimation of the memory run's decimated variant.
+        sweep_runs: Runs of the timed sweep (issue 8's sweep line).
+        sweep_repeats: Alternations of the 1- and 2-worker sweeps (median taken).
         seed: Seed of the random solve targets.
     """
 
@@ -84,6 +86,8 @@ class BenchConfig:
     case_study_rounds: int = 5
     memory_samples: int = 1_000_000
     memory_record_every: int = 1000
+    sweep_runs: int = 120
+    sweep_repeats: int = 3
     seed: int = 6
 
 
@@ -96,6 +100,8 @@ QUICK = BenchConfig(
     case_study_rounds=1,
     memory_samples=5_000,
     memory_record_every=100,
+    sweep_runs=4,
+    sweep_repeats=1,
 )
 """Smoke settings (``--quick``): every line runs, with tiny counts, in a few seconds."""
 
@@ -134,6 +140,8 @@ REQUIRED_KEYS = (
     "case_study_all_runs_s",
     "memory_growth_mb.decimated",
     "memory_growth_mb.full",
+    "sweep_runs_per_s.1_worker",
+    "sweep_runs_per_s.2_workers",
 )
 """Dotted key paths ``bench.json`` always holds (pink's are ``null`` without pink)."""
 
@@ -754,6 +762,29 @@ def bench_memory(config: BenchConfig, log: Log) -> dict[str, Any]:
 # -- report -------------------------------------------------------------------------------
 
 
+def bench_sweep(config: BenchConfig, log: Log) -> dict[str, Any]:
+    """Runs per second of a sweep on a local Dask cluster of 1 and of 2 workers.
+
+    The two cluster sizes alternate ``sweep_repeats`` times (medians taken), so a
+    busy moment of the machine hits both.
+    """
+    from clik.sweep import sweep_rate
+
+    rates: dict[int, list[float]] = {1: [], 2: []}
+    for _ in range(config.sweep_repeats):
+        for workers in (1, 2):
+            rates[workers].append(sweep_rate(workers, config.sweep_runs))
+            log(f"  sweep, {workers} worker(s): {rates[workers][-1]:.2f} runs/s")
+    one, two = float(np.median(rates[1])), float(np.median(rates[2]))
+    return {
+        "runs": config.sweep_runs,
+        "runs_per_s_1_worker": one,
+        "runs_per_s_2_workers": two,
+        "speedup_2_workers": two / one,
+        "all_runs_per_s": {str(k): v for k, v in rates.items()},
+    }
+
+
 def _targets(report: dict[str, Any]) -> list[dict[str, Any]]:
     """Issue 6's targets, each with the measured figure and whether it is met."""
     step, solve = report["step_us"], report["solve"]
@@ -796,6 +827,12 @@ def _targets(report: dict[str, Any]) -> list[dict[str, Any]]:
             report["case_study_all_runs_s"],
             report["case_study_all_runs_s"] < 0.5,
             "< 0.5 s",
+        ),
+        line(
+            "sweep speed-up, 2 workers over 1",
+            report["sweep"]["speedup_2_workers"],
+            report["sweep"]["speedup_2_workers"] >= 1.7,
+            ">= 1.7x",
         ),
         line(
             "decimated memory growth [MB]",
@@ -891,7 +928,12 @@ def markdown(report: dict[str, Any]) -> str:
         f"| memory growth, {mem['decimated']['samples']} samples, record_every = "
         f"{mem['decimated']['record_every']} [MB] | {mem['decimated']['growth_mb']:.1f} |",
         "",
-        "## Targets (issue 6)",
+        f"| sweep, {report['sweep']['runs']} runs, local Dask cluster [runs/s]: 1 worker, "
+        f"2 workers, speed-up | {report['sweep']['runs_per_s_1_worker']:.2f}, "
+        f"{report['sweep']['runs_per_s_2_workers']:.2f}, "
+        f"{report['sweep']['speedup_2_workers']:.2f}x |",
+        "",
+        "## Targets (issues 6 and 8)",
         "",
         "| target | measured | wanted | met |",
         "|---|---|---|---|",
@@ -935,6 +977,8 @@ def run_bench(out: Path, quick: bool = False, log: Log | None = None) -> dict[st
     case = bench_case_study(config, say)
     say("memory (two subprocesses)")
     memory = bench_memory(config, say)
+    say("sweep on a local Dask cluster, 1 and 2 workers")
+    sweep = bench_sweep(config, say)
 
     def median(name: str) -> float | None:
         return steps[name]["median_us"] if name in steps else None
@@ -975,6 +1019,11 @@ def run_bench(out: Path, quick: bool = False, log: Log | None = None) -> dict[st
                 "decimated": memory["decimated"]["growth_mb"],
             },
             "memory": memory,
+            "sweep_runs_per_s": {
+                "1_worker": sweep["runs_per_s_1_worker"],
+                "2_workers": sweep["runs_per_s_2_workers"],
+            },
+            "sweep": sweep,
         }
     )
     report["targets"] = _targets(report)

@@ -378,10 +378,10 @@ class ConstraintSet:
                 if self._obs_step is not None:
                     lb -= self._obs_step
             evaluated[:] = False
-            todo = np.argwhere(np.less(lb, self._thr_matrix, out=self._near)).tolist()
+            near = np.less(lb, self._thr_matrix, out=self._near)
+            todo = np.argwhere(near).tolist() if near.any() else []
             todo += [c.payload[7] for c in self.active if c.kind == "obstacle"]
             thr_o, margin_o = self.obs_threshold, self._margin
-            n_obs = len(self.obstacles)
             while True:  # evaluate, then the nearest pair of each obstacle, until settled
                 for i, o in todo:
                     if evaluated[i, o]:
@@ -415,16 +415,13 @@ class ConstraintSet:
                             )
                         )
                 nearest = lb.argmin(axis=0)
-                todo = [
-                    (int(nearest[o]), o)
-                    for o in range(n_obs)
-                    if lb[nearest[o], o] < margin_o[o] and not evaluated[nearest[o], o]
-                ]
-                if not todo:
+                dist_o = lb[nearest, self._obs_index]
+                unsure = (dist_o < margin_o) & ~evaluated[nearest, self._obs_index]
+                if not unsure.any():
                     break
-            nearest = lb.argmin(axis=0)
-            dist_o, link_o = self._dist_o, self._link_o
-            dist_o[:] = lb[nearest, self._obs_index]
+                todo = [(int(nearest[o]), int(o)) for o in np.flatnonzero(unsure)]
+            link_o = self._link_o
+            self._dist_o = dist_o
             link_o[:] = nearest
             self.min_distance = float(dist_o.min())
             better = np.less(dist_o, self.run_min, out=self._better)

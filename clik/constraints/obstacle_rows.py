@@ -18,6 +18,8 @@ with ``s`` the signed distance, which stays monotonic inside the obstacle.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pinocchio as pin
 
@@ -29,8 +31,12 @@ def point_jacobian(model: pin.Model, data: pin.Data, joint: int, point: np.ndarr
 
     Needs ``computeJointJacobians`` at the current configuration.
     """
-    local = pin.SE3(np.eye(3), data.oMi[joint].actInv(point))
-    return pin.getFrameJacobian(model, data, joint, local, pin.LOCAL_WORLD_ALIGNED)[:3]
+    _LOCAL.translation = data.oMi[joint].actInv(point)
+    return pin.getFrameJacobian(model, data, joint, _LOCAL, pin.LOCAL_WORLD_ALIGNED)[:3]
+
+
+_LOCAL = pin.SE3.Identity()
+"""The point's placement in its joint frame, reused (building an SE3 costs 2-3 us)."""
 
 
 def obstacle_row(
@@ -57,14 +63,14 @@ def obstacle_row(
         out: Row output (nv,).
     """
     d = p_link - p_obstacle
-    norm = float(np.linalg.norm(d))
+    norm = math.sqrt(d.dot(d))
     if distance > 1e-9 and norm > 1e-12:
         n = d / norm
     else:  # contact or penetration: push out along the contact normal
         n = -np.asarray(normal, dtype=float)
     if form == "normalized":
-        np.dot(n, J_point, out=out)
-        return threshold - distance, float(n @ obstacle_velocity)
+        n.dot(J_point, out=out)
+        return threshold - distance, float(n.dot(obstacle_velocity))
     # squared form with the distance's sign kept, e_o = 1/2 (d_o^2 - s |s|), s the signed
     # distance: (13) outside the obstacle, still monotonic inside it.
     scale = abs(distance)
