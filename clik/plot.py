@@ -180,6 +180,17 @@ def _joint_limits(result: TrackingResult) -> tuple[np.ndarray, np.ndarray, np.nd
 # -- axes-level plots --------------------------------------------------------------------
 
 
+def _finish(ax: Axes, ylabel: str, events: bool, which: str = "major") -> Axes:
+    """Time axis, the y label, the events' legend entries, grid and legend."""
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel(ylabel)
+    if events:
+        _event_legend(ax)
+    ax.grid(True, which=which, alpha=0.3)
+    ax.legend(fontsize="small")
+    return ax
+
+
 def tracking_error(
     ax: Axes,
     results: Results,
@@ -212,13 +223,7 @@ def tracking_error(
     if log:
         ax.set_yscale("log")
     unit = "m" if runs[0].reference_position is not None else "rad"
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel(f"tracking error |e| [{unit}]")
-    if events:
-        _event_legend(ax)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize="small")
-    return ax
+    return _finish(ax, f"tracking error |e| [{unit}]", events, which="both")
 
 
 def obstacle_distance(
@@ -285,13 +290,7 @@ def obstacle_distance(
         )
         line.set_gid("threshold")
     ax.axhline(0.0, color="0.5", linewidth=0.6).set_gid("contact")
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("link-obstacle distance [m]")
-    if events:
-        _event_legend(ax)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
-    return ax
+    return _finish(ax, "link-obstacle distance [m]", events)
 
 
 def joint(
@@ -357,13 +356,7 @@ def joint(
                 label=f"threshold {inner:g} deg (d_q = {math.degrees(d_q):g} deg)",
             )
             tline.set_gid("threshold")
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel(f"q{joint_index + 1}" + (f" ({jname})" if jname else "") + " [deg]")
-    if events:
-        _event_legend(ax)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
-    return ax
+    return _finish(ax, f"q{joint_index + 1}" + (f" ({jname})" if jname else "") + " [deg]", events)
 
 
 def _resolve_limits(

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 import pytest
+from urdf_snippets import J1, J2, LINKS, urdf_text
 
 import clik
 from clik import (
@@ -71,19 +72,6 @@ CASE = scenario_path("case_study_both").read_text()
 Q0 = np.radians([180.0, -30.0, -90.0, -30.0])
 GOAL = [0.8, -0.2, 0.0]
 CLEARANCE_TOL = 1e-3  # [m] how far below d_o a recovered link may end
-
-# A three-link URDF, valid as written; rows break one thing in it.
-LINKS = '<link name="base"/><link name="l1"/><link name="l2"/>'
-J1 = (
-    '<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>'
-    '<origin xyz="0 0 0.1" rpy="0 0 0"/><axis xyz="0 0 1"/>'
-    '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
-)
-J2 = '<joint name="j2" type="fixed"><parent link="l1"/><child link="l2"/></joint>'
-
-
-def urdf_text(body: str = LINKS + J1 + J2) -> str:
-    return f'<?xml version="1.0"?>\n<robot name="r">\n{body}\n</robot>\n'
 
 
 def with_link_geometry(geometry: str, inertial: str = "") -> str:

@@ -354,6 +354,11 @@ def test_obstacles_move_and_change_between_runs(planar4r):
     cs.move_obstacle("pin", [0.7, -0.5, 0.0])
     far = tracker.run(line, q0).summary()["min_obstacle_distance"]
     assert far > near + 0.1
+    cs.move_obstacle("pin", [0.7, -0.5, 0.0], velocity=[0.0, 0.07, 0.0])  # comes back in 3 s
+    coming = tracker.run(line, q0).summary()["min_obstacle_distance"]
+    assert coming < far - 0.1
+    cs.move_obstacle("pin", [0.7, -0.5, 0.0], velocity=[0.0, 0.0, 0.0])
+    assert tracker.run(line, q0).summary()["min_obstacle_distance"] == pytest.approx(far)
     cs.set_obstacles(
         [
             Obstacle("a", "sphere", [0.7, -0.28, 0], radius=0),

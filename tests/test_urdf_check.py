@@ -6,21 +6,11 @@ import time
 from pathlib import Path
 
 import pytest
+from urdf_snippets import J1, J2, LINKS
+from urdf_snippets import urdf_text as robot
 
 from clik.errors import RobotLoadError
 from clik.urdf_check import check_urdf
-
-LINKS = '<link name="base"/><link name="l1"/><link name="l2"/>'
-J1 = (
-    '<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>'
-    '<origin xyz="0 0 0.1" rpy="0 0 0"/><axis xyz="0 0 1"/>'
-    '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
-)
-J2 = '<joint name="j2" type="fixed"><parent link="l1"/><child link="l2"/></joint>'
-
-
-def robot(body: str = LINKS + J1 + J2) -> str:
-    return f'<?xml version="1.0"?>\n<robot name="r">\n{body}\n</robot>\n'
 
 
 def write(tmp_path: Path, text: str, name: str = "r.urdf") -> Path:

@@ -9,9 +9,11 @@ Built once per robot and obstacle set (nothing is rebuilt per step):
 - every (link, obstacle) pair, and optionally (link, link) self-collision
   pairs, is a Pinocchio collision pair.
 
-Per step, :meth:`CollisionScene.update` places every geometry (one C++ call)
-and prunes pairs with bounding spheres about each joint's origin, so coal is
-asked only for pairs that may be within the monitoring margin.
+Per step, :meth:`CollisionScene.place_geometries` places every geometry (one
+C++ call) when some pair may be near. Link-obstacle pairs are pruned with the
+motion bounds of :meth:`CollisionScene.motion_bounds` (distance certificates,
+kept by :class:`~clik.constraints.ConstraintSet`); link-link pairs with bounding
+spheres about each joint's origin (:meth:`CollisionScene.place_joints`).
 """
 
 from __future__ import annotations
@@ -130,7 +132,6 @@ class CollisionScene:
         for ob in self.obstacles:
             obj = pin.GeometryObject(f"obstacle:{ob.name}", 0, 0, ob.placement(0.0), ob.geometry)
             self.obstacle_geom.append(gmodel.addGeometryObject(obj))
-        self.obstacle_radius = np.array([ob.bounding_radius for ob in self.obstacles])
         self.obstacle_pairs = np.zeros((self.n_links, len(self.obstacles)), dtype=np.intp)
         for i in range(self.n_links):
             for o, g in enumerate(self.obstacle_geom):
@@ -142,10 +143,6 @@ class CollisionScene:
         self.gmodel = gmodel
         self.gdata = pin.GeometryData(gmodel)
         self._moving = [o for o, ob in enumerate(self.obstacles) if ob.moving]
-        n_obs = len(self.obstacles)
-        self._diff = np.zeros((len(self.joints), n_obs, 3))
-        self._gap = np.zeros((len(self.joints), n_obs))
-        self._radii = self.joint_radius[:, None] + self.obstacle_radius[None, :]
         for request in self.gdata.distanceRequests:
             # GJK's default 1e-6 m tolerance makes hull-hull witness points jitter by that
             # much between samples; rows are derivatives, so ask for 1e-9 m.
@@ -230,17 +227,11 @@ class CollisionScene:
         self.place_joints(data)
         self.place_geometries(data, t)
 
-    def obstacle_lower_bounds(self, centers: np.ndarray) -> np.ndarray:
-        """Bounding-sphere lower bounds of the joint-obstacle distances (n_joints, n_obs) [m].
-
-        Uses the joint origins of the last :meth:`place_joints`; writes into a buffer.
-        """
-        diff, gap = self._diff, self._gap
-        np.subtract(self._joint_pos[:, None, :], centers[None, :, :], out=diff)
-        np.einsum("ijk,ijk->ij", diff, diff, out=gap)
-        np.sqrt(gap, out=gap)
-        gap -= self._radii
-        return gap
+    def replace_obstacle(self, o: int, obstacle: Obstacle) -> None:
+        """Put ``obstacle`` (same shape, new pose or velocity) in slot ``o``: no rebuild."""
+        self.obstacles[o] = obstacle
+        self.gmodel.geometryObjects[self.obstacle_geom[o]].placement = obstacle.placement()
+        self._moving = [i for i, ob in enumerate(self.obstacles) if ob.moving]
 
     def distance(self, pair: int) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
         """Signed distance of a pair, its witness points (first on the link) and the normal."""

@@ -191,11 +191,8 @@ class ConstraintSet:
             moved.velocity = np.array(velocity, dtype=float)
         self.obstacles[i] = moved
         assert self.scene is not None
-        self.scene.obstacles[i] = moved
-        self.scene.gmodel.geometryObjects[self.scene.obstacle_geom[i]].placement = moved.placement()
-        self.obs_pos0[i] = moved.position
+        self.scene.replace_obstacle(i, moved)
         self.obs_vel[i] = moved.velocity
-        self._moving = bool(np.any(self.obs_vel != 0.0))
 
     # -- set-up ------------------------------------------------------------------------
 
@@ -208,9 +205,7 @@ class ConstraintSet:
                 for o in self.obstacles
             ]
         )
-        self.obs_pos0 = np.array([o.position for o in self.obstacles]).reshape(n_obs, 3)
         self.obs_vel = np.array([o.velocity for o in self.obstacles]).reshape(n_obs, 3)
-        self._moving = bool(np.any(self.obs_vel != 0.0))
         if scene is None:
             self.link_labels: list[str] = []
             return
@@ -221,14 +216,12 @@ class ConstraintSet:
         self.link_labels = [
             link if counts[link] == 1 else geoms[i].name for i, link in enumerate(scene.link_names)
         ]
-        self.slot_links = [np.flatnonzero(scene.link_slot == s) for s in range(len(scene.joints))]
         self.pair_names = [
             [f"obstacle:{o.name}:{label}" for o in self.obstacles] for label in self.link_labels
         ]
         if scene.self_pairs:
             sp = np.array([(a, b) for _, a, b in scene.self_pairs])
             self.self_slots = (scene.link_slot[sp[:, 0]], scene.link_slot[sp[:, 1]])
-        self._obs_rmin = np.full(n_obs, np.inf)
         self._rho = scene.motion_bounds()
         self._thr_matrix = np.broadcast_to(self.obs_threshold, (scene.n_links, n_obs)).copy()
         self._margin = self.obs_threshold + self.monitor_margin
