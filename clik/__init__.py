@@ -1,7 +1,7 @@
 """clik: closed-loop inverse kinematics for redundant manipulators.
 
 Sciavicco and Siciliano's dynamic solution of the inverse kinematic problem
-(METHOD.md): the joint trajectory is the solution of a dynamical system whose
+(docs/method.md): the joint trajectory is the solution of a dynamical system whose
 error dynamics are stable, with obstacle and joint-range constraints as extra
 task rows.
 
@@ -28,10 +28,10 @@ from clik.errors import (
     UnknownRobotError,
 )
 from clik.result import TrackingResult
-from clik.robot import Robot
+from clik.robot import MimicJointWarning, Robot
 from clik.solve_mode import SolveResult, solve
 from clik.task import Task
-from clik.tracking import StabilityWarning, Tracker, track
+from clik.tracking import ReachWarning, StabilityWarning, Tracker, track
 
 __all__ = [
     "ClikError",
@@ -40,7 +40,9 @@ __all__ = [
     "InfeasibleError",
     "InputError",
     "JointNotFound",
+    "MimicJointWarning",
     "OutputExistsError",
+    "ReachWarning",
     "Robot",
     "RobotLoadError",
     "ScenarioError",

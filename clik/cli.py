@@ -1,8 +1,10 @@
 """The ``clik`` command line: solve, demo, show, robots, sweep, reach and bench.
 
 Errors are printed without a traceback (``--debug`` shows it) and the exit
-code tells the kind: 0 success, 2 bad input, 3 infeasible (the run stopped
-with ``deadlock`` or ``diverged``; its outputs are still written), 4 internal.
+code tells the kind: 0 success, 1 a sweep with failed runs (``clik sweep``:
+a run raised, or ended ``violated`` or ``diverged``; every row is still
+written), 2 bad input, 3 infeasible (the run stopped with ``deadlock`` or
+``diverged``; its outputs are still written), 4 internal.
 """
 
 from __future__ import annotations
@@ -14,9 +16,12 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from clik.errors import EXIT_CODES, ClikError, InputError, OutputExistsError
-from clik.result import TrackingResult, write_json
+from clik.result import FAILED_STATUSES, TrackingResult, write_json
 
-INFEASIBLE_STATUSES = ("deadlock", "diverged")
+INFEASIBLE_STATUSES = FAILED_STATUSES
+
+SWEEP_FAILED = 1
+"""Exit code of ``clik sweep`` when a run in its folder raised or ended violated or diverged."""
 
 
 def prepare_out(out: Path, force: bool) -> Path:
@@ -108,7 +113,13 @@ def write_extras(args: argparse.Namespace, result: TrackingResult, out: Path, na
 def cmd_demo(args: argparse.Namespace) -> int:
     from clik.demo import run_demo
 
-    return run_demo(Path(args.out), force=args.force, quiet=args.quiet)
+    return run_demo(
+        Path(args.out),
+        force=args.force,
+        html=not args.no_html,
+        plots=not args.no_plots,
+        quiet=args.quiet,
+    )
 
 
 def cmd_show(args: argparse.Namespace) -> int:
@@ -134,7 +145,13 @@ def cmd_robots(args: argparse.Namespace) -> int:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from clik.sweep.execute import run_sweep
+    """Run a sweep; 1 (:data:`SWEEP_FAILED`) when a run in the folder failed, else 0.
+
+    The last line printed (unless ``--quiet``) counts every run in the folder
+    per status, e.g. ``completed 118, deadlock 1, violated 1, raised 0``. A
+    failed sweep also says so on stderr, ``--quiet`` or not.
+    """
+    from clik.sweep.execute import run_sweep, status_line
     from clik.sweep.spec import load_sweep
 
     sweep = load_sweep(args.sweep)
@@ -166,6 +183,15 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         if report.lost:
             print(f"  {report.lost} runs were cancelled by the cluster: rerun to compute them")
         print(f"  wrote {report.results}")
+        print(status_line(report.all_statuses))
+    if report.failed:
+        print(
+            f"clik sweep: {report.failed} of {sum(report.all_statuses.values())} runs failed "
+            f"({status_line(report.all_statuses)}); their status, reason and error are in "
+            f"{report.results}",
+            file=sys.stderr,
+        )
+        return SWEEP_FAILED
     return 0
 
 
@@ -235,8 +261,11 @@ def parser() -> argparse.ArgumentParser:
     d.add_argument("--out", default="out/demo")
     d.add_argument("--force", action="store_true")
     d.add_argument("--no-html", action="store_true", help="skip the HTML scenes")
-    d.add_argument("--plots", action="store_true", help="(default) the paper's figures as PNG")
-    d.add_argument("--no-plots", action="store_true", help="skip the figures")
+    figures = d.add_mutually_exclusive_group()
+    figures.add_argument(
+        "--plots", action="store_true", help="(default) the paper's figures as PNG"
+    )
+    figures.add_argument("--no-plots", action="store_true", help="skip the figures")
     d.add_argument("--quiet", action="store_true")
     d.set_defaults(func=cmd_demo)
 
@@ -254,7 +283,13 @@ def parser() -> argparse.ArgumentParser:
     b.add_argument("--quiet", action="store_true")
     b.set_defaults(func=cmd_bench)
 
-    w = sub.add_parser("sweep", help="run a sweep file (many scenarios) on Dask")
+    w = sub.add_parser(
+        "sweep",
+        help="run a sweep file (many scenarios) on Dask",
+        description="Run a sweep file (many scenarios) on Dask. Exit code 1 when a run in the "
+        "output folder raised or ended violated or diverged (every row is still written); the "
+        "last line counts the runs per status.",
+    )
     w.add_argument("sweep", type=Path, help="the sweep file (TOML)")
     w.add_argument("--out", required=True, help="output folder (rerun to resume)")
     where = w.add_mutually_exclusive_group()

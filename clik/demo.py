@@ -1,4 +1,4 @@
-"""``clik demo``: the paper's case study (METHOD.md), all runs, with a table and figures."""
+"""``clik demo``: the paper's case study (docs/method.md), all runs, with a table and figures."""
 
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 
 With per-row gains ``K`` the discrete error map of law (9)/(23) is
 ``e_{k+1} ~ (I - dt J J^T K) e_k`` (plus the reference's motion), stable when
-``dt lambda_max(K^{1/2} J J^T K^{1/2}) < 2`` (METHOD.md, "Implementation
+``dt lambda_max(K^{1/2} J J^T K^{1/2}) < 2`` (docs/method.md, "Implementation
 notes"); ``alpha = 1/dt`` is the paper's optimal scalar choice.
 """
 

@@ -1,4 +1,4 @@
-"""The three closed-loop laws of METHOD.md, as functions on preallocated arrays.
+"""The three closed-loop laws of docs/method.md, as functions on preallocated arrays.
 
 Each law maps the (possibly extended) task Jacobian ``J`` (r, n), the error
 ``e`` (r,), per-row gains ``K`` (r,) and the reference velocity ``xdot_d``
@@ -69,7 +69,7 @@ def nonlinear(
 
     ``beta = (e^T xdot_d) / |J^T e|^2`` makes ``Vdot = -e^T J J^T K e`` along
     the exact flow. It is unbounded as ``e -> 0``; in discrete time it is
-    clipped to ``|beta| <= beta_max`` [1/s] (METHOD.md: "filter it").
+    clipped to ``|beta| <= beta_max`` [1/s] (docs/method.md: "filter it").
 
     Args:
         jte: Scratch array (n,) for ``J^T e``.
@@ -138,3 +138,129 @@ try:  # numpy's private gufunc: checked once here, with a public fallback
     _solve1(np.eye(2), np.ones(2))
 except (ImportError, AttributeError, TypeError):  # pragma: no cover - other numpy builds
     _solve1 = _numpy_solve
+
+
+# -- law (10) on the extended task: constraints first, the task in their null space ----
+
+CONDITION_RATIO = 0.01
+"""Damping starts when a singular value falls below this fraction of ``sigma_max(J)``."""
+
+STEP_BUDGET = 0.02
+"""Largest joint step [rad or m] each level of law (10) may ask for in one sample; a larger
+one is scaled down whole (its direction kept), see :func:`prioritized`."""
+
+
+def damped_solve(A: np.ndarray, b: np.ndarray, epsilon: float, damping: float) -> np.ndarray:
+    r"""``y`` with ``M^T y`` the singularity-robust pseudoinverse solution, ``A = M M^T``.
+
+    Singular-value filtering (Maciejewski and Klein 1988; Chiaverini 1997): with
+    ``A = V diag(sigma_i^2) V^T``,
+
+    .. math::
+
+        y = V \operatorname{diag}\big(1 / (\max(\sigma_i^2, \epsilon^2) + \lambda_0^2)\big)
+        V^T b,
+
+    so a direction with ``sigma_i >= epsilon`` is solved exactly (the pseudoinverse of
+    eq. (10)), and one that loses rank (``sigma_i < epsilon``) contributes
+    ``sigma_i / epsilon^2 <= 1 / epsilon`` times its demand instead of ``1 / sigma_i``:
+    the joint speed stays bounded through a singularity and vanishes on an exactly
+    blocked direction.
+
+    Args:
+        A: ``M M^T`` (r, r).
+        b: Right-hand side (r,).
+        epsilon: Singular value [row unit per rad] below which damping starts.
+        damping: ``lambda_0``, the user's constant damping (0: none).
+    """
+    w, V = np.linalg.eigh(A)
+    np.maximum(w, epsilon * epsilon, out=w)
+    w += damping * damping
+    if not np.all(w > 0.0):  # exactly singular without damping: drop those directions
+        w[w <= 0.0] = np.inf
+    return V.dot(V.T.dot(b) / w)
+
+
+def null_space_projector(C: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
+    """Orthonormal basis ``V_r`` (k, n) of the row space of ``C`` and ``N = I - V_r^T V_r``.
+
+    Singular values below ``tolerance`` count as zero: a constraint row that duplicates
+    another one adds no direction.
+    """
+    _, s, vt = np.linalg.svd(C, full_matrices=False)
+    basis = vt[s > tolerance]
+    return basis, np.eye(C.shape[1]) - basis.T @ basis
+
+
+def _within_budget(qdot: np.ndarray, dt: float) -> np.ndarray:
+    """``qdot`` scaled down whole so that no joint moves more than ``STEP_BUDGET`` in ``dt``."""
+    step = float(np.abs(qdot).max()) * dt if qdot.size else 0.0
+    if step > STEP_BUDGET:
+        qdot *= STEP_BUDGET / step
+    return qdot
+
+
+def prioritized(
+    J: np.ndarray,
+    b_task: np.ndarray,
+    C: np.ndarray,
+    b_constraint: np.ndarray,
+    out: np.ndarray,
+    damping: float,
+    dt: float,
+) -> float:
+    r"""Law (10) on the extended task, constraints first and the task in their null space.
+
+    With the active constraint rows ``C`` (v, n) and their demand
+    ``b_c = K_c e_c + f_c``, and the task ``J`` (m, n) with ``b = K e + xdot_d``:
+
+    .. math::
+
+        \dot q_c = C^{\#} b_c, \qquad N = I - C^{+} C, \qquad
+        \dot q = \dot q_c + (J N)^{\#} (b - J \dot q_c)
+
+    (Siciliano and Slotine 1991; Chiaverini 1997), ``#`` the damped pseudoinverse of
+    :func:`damped_solve`. Where ``(J; C)`` has full rank this is exactly
+    ``J_e^+ (K e_e + ydot_d)`` of eq. (10) on the extended task (24)-(25); where the task
+    and the constraints conflict (``J N`` loses rank) the constraints still hold and the
+    task gives way, with bounded joint speeds, instead of the extended Jacobian's inverse
+    swinging the arm.
+
+    Each level is damped below ``epsilon = 0.01 sigma_max(J)`` (singularity-robust), and a
+    level whose joint step ``max_i |qdot_i| dt`` would exceed :data:`STEP_BUDGET` is scaled
+    down whole, direction kept: a task error that built up while blocked is not caught up
+    through a direction that just regained a little rank (the "swing"). In regular
+    tracking neither is active and the solution is the exact one; a scaled level leaves
+    part of its demand unrealised, which the returned fraction reports (and the deadlock
+    check counts).
+
+    Args:
+        J: Task rows (m, n).
+        b_task: ``K e + xdot_d`` for the task rows (m,).
+        C: Active constraint rows (v, n), v >= 0.
+        b_constraint: ``K_c e_c + f_c`` (v,).
+        out: Joint velocity output (n,) [rad/s].
+        damping: The user's constant damping ``lambda_0`` (0: none).
+        dt: Sample time [s].
+
+    Returns:
+        The part of the task demand the law could not realise, ``|b - J qdot| / |b|``
+        (0 when tracked exactly; near 1 when the task is blocked).
+    """
+    scale = math.sqrt(float(np.max(np.einsum("ij,ij->i", J, J)))) if J.size else 0.0
+    epsilon = CONDITION_RATIO * scale
+    if C.shape[0]:
+        _, N = null_space_projector(C, 1e-9 * max(scale, 1.0))
+        qdot_c = _within_budget(
+            C.T.dot(damped_solve(C.dot(C.T), b_constraint, epsilon, damping)), dt
+        )
+        JN = J.dot(N)
+        rest = b_task - J.dot(qdot_c)
+        qdot_t = _within_budget(JN.T.dot(damped_solve(JN.dot(JN.T), rest, epsilon, damping)), dt)
+        np.add(qdot_c, qdot_t, out=out)
+    else:
+        out[:] = _within_budget(J.T.dot(damped_solve(J.dot(J.T), b_task, epsilon, damping)), dt)
+    demand = float(np.linalg.norm(b_task))
+    if demand == 0.0:
+        return 0.0
+    return float(np.linalg.norm(b_task - J.dot(out))) / demand

@@ -8,7 +8,7 @@ a positive angle turns ``+y`` toward ``+x``, and each link points along its own
 
     p = \\sum_i l_i \\, (\\sin \\theta_i, \\cos \\theta_i),
 
-the paper's convention (METHOD.md, "The paper's case study"); a fixed frame
+the paper's convention (docs/method.md, "The paper's case study"); a fixed frame
 ``tip`` sits at the end of the last link. Each link's collision geometry is a
 capsule along the link (a segment when its radius is 0), written as a URDF
 cylinder that Pinocchio turns into a capsule because the link lists it under

@@ -6,13 +6,14 @@ Axes-level functions draw into a Matplotlib ``Axes`` that the caller owns
 - :func:`tracking_error`: the task error norm ``|e|`` against time (Fig. 3).
 - :func:`obstacle_distance`: the minimum link-obstacle distance with the
   threshold ``d_o`` drawn (Fig. 4).
-- :func:`joint`: one joint against time, in degrees, with its limit and the
-  threshold band ``d_q`` drawn (Fig. 5).
+- :func:`joint`: one joint against time, with its limit and the threshold band
+  ``d_q`` drawn (Fig. 5): a revolute joint in degrees, a prismatic joint in
+  metres (a continuous joint's cos and sin as they are).
 - :func:`planar_stick`: the arm drawn every ``every`` seconds, projected on a
   plane, with the obstacles and their thresholds.
 
 Each takes one result or several (overlaid, one colour each) and marks the
-constraint events (METHOD.md, "Activation and release") as vertical lines in
+constraint events (docs/method.md, "Activation and release") as vertical lines in
 the colour of their run: solid for ``activate``, dashed for ``release``,
 dotted for ``skipped``.
 
@@ -143,10 +144,27 @@ def _event_legend(ax: Axes) -> None:
 
 
 def _joint_name(result: TrackingResult, joint_index: int) -> str | None:
-    """The joint's name, when the result still has its robot."""
-    if result.robot is not None and joint_index < len(result.robot.joint_names):
-        return str(result.robot.joint_names[joint_index])
+    """Name of the joint of configuration entry ``joint_index``, when the result has its robot."""
+    names = getattr(result.robot, "q_joint_names", None)
+    if names is not None and joint_index < len(names):
+        return str(names[joint_index])
     return None
+
+
+_DISPLAY = {"rad": (180.0 / math.pi, "deg"), "m": (1.0, "m"), "": (1.0, "")}
+"""Configuration unit -> (factor to the displayed unit, displayed unit)."""
+
+
+def _display(result: TrackingResult, joint_index: int) -> tuple[float, str]:
+    """(factor, unit) showing configuration entry ``joint_index``: a revolute joint in
+    degrees, a prismatic one in metres, a continuous joint's cos or sin unitless.
+
+    Without the robot (a result read back from a file) every entry is shown as an angle.
+    """
+    units = getattr(result.robot, "q_units", None)
+    if units is not None and joint_index < len(units):
+        return _DISPLAY[units[joint_index]]
+    return _DISPLAY["rad"]
 
 
 def _obstacle_threshold(results: list[TrackingResult]) -> float | None:
@@ -166,15 +184,18 @@ def _has_distance(result: TrackingResult) -> bool:
 
 
 def _joint_limits(result: TrackingResult) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """(lower, upper, threshold) of the joint-range rows of a run, when it had them [rad]."""
+    """(lower, upper, threshold) of a run's joint-range rows, per configuration entry (nq,).
+
+    NaN where an entry has no row (a continuous joint); None when the run had no
+    joint-range rows or they cannot be placed (see
+    :func:`~clik.constraints.joint_limits.limits_by_q`) [rad or m].
+    """
     used = result.info.get("summary_extra", {}).get("joint_limits_used")
     if not used:
         return None
-    return (
-        np.asarray(used["lower"], dtype=float),
-        np.asarray(used["upper"], dtype=float),
-        np.asarray(used["threshold"], dtype=float),
-    )
+    from clik.constraints.joint_limits import limits_by_q
+
+    return limits_by_q(used, result.robot, result.q.shape[1])
 
 
 # -- axes-level plots --------------------------------------------------------------------
@@ -303,20 +324,24 @@ def joint(
     *,
     events: bool = True,
 ) -> Axes:
-    """One joint against time in degrees, with its limit and threshold band (the paper's Fig. 5).
+    """One joint against time, with its limit and threshold band (the paper's Fig. 5).
+
+    A revolute joint is drawn in degrees, a prismatic joint in metres, a
+    continuous joint's cos or sin entry unitless (known from the result's robot;
+    a result without its robot is drawn in degrees).
 
     Args:
         ax: Axes to draw into.
         results: One result or several, overlaid.
         labels: Legend label of each result.
         joint_index: Index of the joint in ``q`` (0-based: the case study's ``q_3`` is 2).
-        limit: The joint limit [rad]: a ``(lower, upper)`` pair (either may be None), or
-            one value, an upper limit when the run starts below it and a lower one
-            otherwise. Default: the limits of the runs' joint-range rows
+        limit: The joint limit [rad or m]: a ``(lower, upper)`` pair (either may be
+            None), or one value, an upper limit when the run starts below it and a
+            lower one otherwise. Default: the limits of the runs' joint-range rows
             (``info["summary_extra"]["joint_limits_used"]``) that lie near the plotted
             range, none when the runs had no such rows.
-        threshold: ``d_q`` [rad]: the band between the limit and ``limit -+ d_q`` is
-            shaded and its inner edge drawn; default: the runs' own threshold.
+        threshold: ``d_q`` [rad or m]: the band between the limit and ``limit -+ d_q``
+            is shaded and its inner edge drawn; default: the runs' own threshold.
         events: Mark the events of this joint's range constraints.
 
     Returns:
@@ -330,33 +355,40 @@ def joint(
     if not (0 <= joint_index < nq):
         raise InputError("joint_index", f"an index in [0, {nq - 1}]", joint_index)
     jname = _joint_name(first, joint_index)
+    factor, unit = _display(first, joint_index)
     lo_data, hi_data = math.inf, -math.inf
     for r, name, color in zip(runs, names, _colors(len(runs)), strict=True):
-        q = np.degrees(r.q[:, joint_index])
+        q = factor * r.q[:, joint_index]
         lo_data, hi_data = min(lo_data, float(q.min())), max(hi_data, float(q.max()))
         ax.plot(r.t, q, color=color, label=name)
         if events:
             _events(ax, r, color, f"joint:{jname}:" if jname else "joint:")
-    lower, upper, d_q = _resolve_limits(runs, joint_index, limit, threshold, lo_data, hi_data)
+    lower, upper, d_q = _resolve_limits(
+        runs, joint_index, limit, threshold, lo_data, hi_data, factor, unit
+    )
+    suffix = f" {unit}" if unit else ""
     for side, value, sign in (("lower", lower, 1.0), ("upper", upper, -1.0)):
         if value is None:
             continue
-        deg = math.degrees(value)
-        line = ax.axhline(deg, color="k", linewidth=1.2, label=f"{side} limit {deg:g} deg")
+        shown = factor * value
+        line = ax.axhline(shown, color="k", linewidth=1.2, label=f"{side} limit {shown:g}{suffix}")
         line.set_gid("limit")
         if d_q is not None:
-            inner = math.degrees(value + sign * d_q)
-            band = ax.axhspan(min(deg, inner), max(deg, inner), color="0.5", alpha=0.2)
+            inner = factor * (value + sign * d_q)
+            band = ax.axhspan(min(shown, inner), max(shown, inner), color="0.5", alpha=0.2)
             band.set_gid("threshold_band")
             tline = ax.axhline(
                 inner,
                 color="k",
                 linestyle="--",
                 linewidth=1.0,
-                label=f"threshold {inner:g} deg (d_q = {math.degrees(d_q):g} deg)",
+                label=f"threshold {inner:g}{suffix} (d_q = {factor * d_q:g}{suffix})",
             )
             tline.set_gid("threshold")
-    return _finish(ax, f"q{joint_index + 1}" + (f" ({jname})" if jname else "") + " [deg]", events)
+    ylabel = (
+        f"q{joint_index + 1}" + (f" ({jname})" if jname else "") + (f" [{unit}]" if unit else "")
+    )
+    return _finish(ax, ylabel, events)
 
 
 def _resolve_limits(
@@ -364,26 +396,35 @@ def _resolve_limits(
     i: int,
     limit: float | tuple[float | None, float | None] | None,
     threshold: float | None,
-    lo_deg: float,
-    hi_deg: float,
+    lo_shown: float,
+    hi_shown: float,
+    factor: float = 180.0 / math.pi,
+    unit: str = "deg",
 ) -> tuple[float | None, float | None, float | None]:
-    """Lower and upper limits to draw [rad] and ``d_q`` [rad]."""
+    """Lower and upper limits to draw and ``d_q`` [rad or m].
+
+    ``lo_shown``, ``hi_shown``: the plotted data range in the displayed unit
+    (``factor`` times the configuration value); default limits farther than
+    half that range (at least 10 deg, or 0.05 m) are not drawn.
+    """
     used = next((lim for lim in map(_joint_limits, runs) if lim is not None), None)
-    if threshold is None and used is not None:
+    if threshold is None and used is not None and math.isfinite(used[2][i]):
         threshold = float(used[2][i])
     if limit is None:
         if used is None:
             return None, None, None
-        span = max(hi_deg - lo_deg, 1.0)
-        near = (lo_deg - max(10.0, 0.5 * span), hi_deg + max(10.0, 0.5 * span))
+        min_span, min_margin = (1.0, 10.0) if unit == "deg" else (0.01, 0.05)
+        span = max(hi_shown - lo_shown, min_span)
+        margin = max(min_margin, 0.5 * span)
+        near = (lo_shown - margin, hi_shown + margin)
         pair = [float(used[0][i]), float(used[1][i])]
         lower, upper = (
-            v if math.isfinite(v) and near[0] <= math.degrees(v) <= near[1] else None for v in pair
+            v if math.isfinite(v) and near[0] <= factor * v <= near[1] else None for v in pair
         )
         return lower, upper, threshold
     if isinstance(limit, tuple | list):
         if len(limit) != 2:
-            raise InputError("limit", "one value or a (lower, upper) pair [rad]", limit)
+            raise InputError("limit", "one value or a (lower, upper) pair [rad or m]", limit)
         lower, upper = limit
         return (
             None if lower is None else float(lower),
@@ -589,11 +630,15 @@ def case_study_plots(results: dict[str, TrackingResult], law: str = "(9)") -> di
 
     if runs[0].q.shape[1] > CASE_STUDY_JOINT:
         used = next((lim for lim in map(_joint_limits, runs) if lim is not None), None)
-        upper = float(used[1][CASE_STUDY_JOINT]) if used is not None else CASE_STUDY_LIMIT
-        d_q = float(used[2][CASE_STUDY_JOINT]) if used is not None else CASE_STUDY_THRESHOLD
+        upper, d_q = CASE_STUDY_LIMIT, CASE_STUDY_THRESHOLD
+        if used is not None and math.isfinite(used[1][CASE_STUDY_JOINT]):
+            upper = float(used[1][CASE_STUDY_JOINT])
+            d_q = float(used[2][CASE_STUDY_JOINT])
         fig = _figure()
         joint(fig.axes[0], runs, labels, CASE_STUDY_JOINT, limit=(None, upper), threshold=d_q)
-        fig.axes[0].set_title(f"Fig. 5: joint q3, limit {math.degrees(upper):g} deg, law {law}")
+        factor, unit = _display(runs[0], CASE_STUDY_JOINT)
+        shown = f"{factor * upper:g} {unit}".rstrip()
+        fig.axes[0].set_title(f"Fig. 5: joint q3, limit {shown}, law {law}")
         figs["fig5"] = fig
 
     with_robot = [(label, r) for label, r in zip(labels, runs, strict=True) if r.robot is not None]
@@ -662,8 +707,8 @@ def result_plots(results: Results, names: Sequence[str] | None = None) -> dict[s
     Returns:
         ``{"tracking_error": ..., "obstacle_distance": ..., "joints": ...}``, the
         distance only when a run has obstacles. The joint figure has one panel per
-        joint (revolute joints in degrees) with the joint-range limits and thresholds
-        of runs that had joint-range rows.
+        configuration entry (revolute joints in degrees, prismatic joints in metres)
+        with the joint-range limits and thresholds of runs that had joint-range rows.
     """
     runs = _as_list(results)
     labels = _labels(runs, names)

@@ -46,10 +46,22 @@ class ReferenceChunks:
         trajectory: The trajectory.
         t: The run's time grid [s].
         size: Samples per chunk.
+        center: A point [m] whose largest distance to the position reference is kept
+            in :attr:`farthest` (the reach check).
     """
 
-    def __init__(self, task: Task, trajectory: Trajectory, t: np.ndarray, size: int) -> None:
+    def __init__(
+        self,
+        task: Task,
+        trajectory: Trajectory,
+        t: np.ndarray,
+        size: int,
+        center: np.ndarray | None = None,
+    ) -> None:
         self.task, self.trajectory, self.t, self.size = task, trajectory, t, size
+        self.center = center
+        self.farthest = (0.0, 0.0)
+        """Largest distance [m] of the position reference from ``center``, and its time [s]."""
         self._first = self._sample(0)
         for c0 in range(size, t.shape[0], size):  # validate the rest before any step
             self._sample(c0)
@@ -58,6 +70,11 @@ class ReferenceChunks:
         c1 = min(c0 + self.size, self.t.shape[0])
         P_d, R_d, FF = task_reference(self.task, self.trajectory.sample(self.t[c0:c1]))
         at_rest = ~np.any(FF != 0.0, axis=1)
+        if self.center is not None and P_d is not None:
+            dist = np.linalg.norm(P_d - self.center, axis=1)
+            i = int(np.argmax(dist))
+            if dist[i] > self.farthest[0]:
+                self.farthest = (float(dist[i]), float(self.t[c0 + i]))
         return c0, c1, P_d, R_d, FF, at_rest
 
     def load(self, c0: int) -> Chunk:

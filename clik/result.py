@@ -19,10 +19,15 @@ import numpy as np
 if TYPE_CHECKING:
     from clik.robot import Robot
 
-STATUSES = ("completed", "deadlock", "diverged", "converged", "max_iterations")
-"""Run statuses: ``completed`` (reached the end of the trajectory), ``deadlock``
-(Remark 2: ``|J_e^T e_e|`` ~ 0 while ``|e_e|`` is not), ``diverged`` (a
-non-finite value appeared), and for solve mode ``converged`` / ``max_iterations``."""
+STATUSES = ("completed", "violated", "deadlock", "diverged", "converged", "max_iterations")
+"""Run statuses: ``completed`` (reached the end of the trajectory with no limit crossed),
+``violated`` (reached the end, but a constraint's limit was crossed: see ``violations``),
+``deadlock`` (Remark 2: the law cannot reduce the task error, e.g. the task and the
+constraints conflict), ``diverged`` (a non-finite value, a joint step above the bound, or
+unstable gains), and for solve mode ``converged`` / ``max_iterations``."""
+
+FAILED_STATUSES = ("violated", "deadlock", "diverged")
+"""Statuses of a run that did not do what was asked (``clik solve`` exits with 3)."""
 
 _ARRAYS = (
     "t",
@@ -61,6 +66,9 @@ class TrackingResult:
         joint_min: Minimum of each joint over every step (nq,).
         joint_max: Maximum of each joint over every step (nq,).
         events: Constraint events ``{"t", "constraint", "action"}`` (see ``clik.constraints``).
+        violations: Limits crossed, ``{"constraint", "t_first", "t_last", "worst"}``
+            (``worst``: deepest penetration [m] or largest excursion [rad or m]); see
+            :mod:`clik.violations`.
         min_obstacle_distance: Minimum link-obstacle distance per sample (N,) [m], or None.
         info: Free-form metadata (robot, frame, law, gain, dt, ...), JSON-serialisable.
     """
@@ -82,6 +90,7 @@ class TrackingResult:
     joint_min: np.ndarray
     joint_max: np.ndarray
     events: list[dict[str, Any]] = field(default_factory=list)
+    violations: list[dict[str, Any]] = field(default_factory=list)
     min_obstacle_distance: np.ndarray | None = None
     active_count: np.ndarray | None = None
     info: dict[str, Any] = field(default_factory=dict)
@@ -105,6 +114,7 @@ class TrackingResult:
             "joint_min": [float(v) for v in self.joint_min],
             "joint_max": [float(v) for v in self.joint_max],
             "events": [dict(e) for e in self.events],
+            "violations": [dict(v) for v in self.violations],
         }
         if self.orientation_error_norm is not None and self.reference_position is not None:
             summary["max_orientation_error"] = float(np.max(self.orientation_error_norm))
@@ -129,6 +139,7 @@ class TrackingResult:
             "max_task_error": self.max_task_error,
             "final_task_error": self.final_task_error,
             "events": self.events,
+            "violations": self.violations,
             "info": self.info,
         }
         arrays["meta_json"] = np.array(json.dumps(meta))

@@ -5,6 +5,21 @@
 URDF goes through :func:`clik.urdf_check.check_urdf` before Pinocchio reads it.
 The visual model is built on first use: meshes for display are slow to read
 (about 0.5 s for the Panda) and the kinematics never needs them.
+
+Joint kinds: a *revolute* joint's value is an angle [rad] (degrees only where a
+scenario says ``unit = "deg"``), a *prismatic* joint's a length [m], always; a
+*continuous* joint (unlimited revolute) is stored as (cos, sin).
+
+Mimic joints (URDF ``<mimic>``) are not driven by their leader: clik moves every
+joint independently, and Pinocchio 4.1's ``mimic=True`` refuses several of the
+robots clik offers (a follower parsed before its leader: romeo, talos_full,
+talos_full_box; a leader that does not exist: alex_psyonic_hands), cannot lock
+a leader alone, and gives a follower no velocity of its own (nv = 0), which
+clik's motion bounds for obstacle certificates do not cover. So
+:meth:`Robot.load` locks each follower at the value its leader implies
+(``multiplier * leader + offset``, the leader at its reference, or at its
+``lock`` value) and warns with :class:`MimicJointWarning` when the leader
+stays free (then the follower no longer follows it).
 """
 
 from __future__ import annotations
@@ -12,7 +27,9 @@ from __future__ import annotations
 import hashlib
 import importlib.resources
 import math
+import warnings
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from os.path import join
 from pathlib import Path
 
@@ -34,6 +51,90 @@ PANDA_FINGERS = {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}
 """``lock`` for the Panda's fingers, closed: ``Robot.load("panda", lock=PANDA_FINGERS)``
 has the 7 arm joints."""
 
+REVOLUTE = "revolute"
+"""Kind of a one-DOF rotation with limits: one value, an angle [rad]."""
+CONTINUOUS = "continuous"
+"""Kind of an unlimited rotation: two configuration values (cos, sin), one DOF [rad]."""
+PRISMATIC = "prismatic"
+"""Kind of a one-DOF translation: one value, a length [m] (never converted from degrees)."""
+OTHER = "other"
+"""Kind of any other joint (planar, spherical, free-flyer): values not converted."""
+
+UNITS = ("rad", "deg")
+"""Units of revolute joint values a user may write (prismatic values are always metres)."""
+
+
+class MimicJointWarning(UserWarning):
+    """Mimic joints were locked while their leader stays free (the follower does not follow).
+
+    Attributes:
+        joints: Follower name -> (leader name, value it is locked at [rad or m]).
+    """
+
+    def __init__(self, message: str, joints: dict[str, tuple[str, float]]) -> None:
+        super().__init__(message)
+        self.joints = joints
+
+
+@dataclass(frozen=True)
+class Mimic:
+    """A URDF ``<mimic>``: ``follower = multiplier * leader + offset`` [rad or m].
+
+    Attributes:
+        leader: Name of the joint followed.
+        multiplier: Factor on the leader's value.
+        offset: Added to the product [rad or m].
+    """
+
+    leader: str
+    multiplier: float = 1.0
+    offset: float = 0.0
+
+
+class JointValues(list):
+    """Joint values as a scenario writes them, with their unit; the robot converts them.
+
+    The list holds the values scaled as if every one were an angle (so with
+    ``unit = "deg"`` a revolute robot's values are in radians, as before);
+    :meth:`Robot.check_configuration` and :meth:`Robot.configuration` use
+    :attr:`written` and :attr:`unit` instead, converting only the angles
+    (revolute and continuous joints) and keeping prismatic values in metres.
+
+    Attributes:
+        written: The values as written (revolute in ``unit``, prismatic in metres).
+        unit: ``"rad"`` or ``"deg"``.
+    """
+
+    def __init__(self, written: Sequence[float], unit: str = "rad") -> None:
+        scale = _unit_scale(unit, "unit")
+        super().__init__(float(v) * scale for v in written)
+        self.written = [float(v) for v in written]
+        self.unit = unit
+
+    def __reduce__(self) -> tuple[type, tuple[list[float], str]]:
+        return (JointValues, (self.written, self.unit))
+
+
+def _unit_scale(unit: str, field: str) -> float:
+    """Factor from ``unit`` to radians."""
+    if unit not in UNITS:
+        raise InputError(field, "one of 'rad', 'deg'", got=unit)
+    return math.pi / 180.0 if unit == "deg" else 1.0
+
+
+def joint_kind(joint: object) -> str:
+    """Kind of a Pinocchio joint model: :data:`REVOLUTE`, :data:`CONTINUOUS`, ...
+
+    Args:
+        joint: An entry of ``model.joints``.
+    """
+    nq, nv, name = joint.nq, joint.nv, joint.shortname()  # type: ignore[attr-defined]
+    if nq == 1 and nv == 1:
+        return PRISMATIC if name.startswith("JointModelP") else REVOLUTE  # PX, PY, PZ, Prismatic...
+    if nq == 2 and nv == 1:
+        return CONTINUOUS
+    return OTHER
+
 
 class Robot:
     """A fixed-base robot model with its data.
@@ -49,6 +150,9 @@ class Robot:
         data: Pinocchio data for ``model``.
         collision_model: Collision geometry (coal shapes).
         collision_data: Geometry data for ``collision_model``.
+        mimics: The URDF's mimic joints: follower name -> :class:`Mimic`.
+        locked: Joints removed from the model, with their value [rad or m]: the
+            ``lock`` given to :meth:`load` and the mimic followers it locked.
     """
 
     def __init__(
@@ -72,6 +176,8 @@ class Robot:
         self._visual_model = visual_model
         self._reduction: tuple[pin.Model, list[int], np.ndarray] | None = None
         self._source_digest: str | None = None  # of the file as checked, see visual_model
+        self.mimics: dict[str, Mimic] = {}
+        self.locked: dict[str, float] = {}
 
     # ------------------------------------------------------------------ loading
 
@@ -99,14 +205,27 @@ class Robot:
                 ``{"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}``;
                 the models are reduced to the other joints.
 
+        Mimic joints (URDF ``<mimic>``, e.g. the Panda's ``panda_finger_joint2``)
+        are always locked, at ``multiplier * leader + offset`` (clipped into the
+        follower's limits), the leader taken at its ``lock`` value or else at its
+        reference; a follower named in ``lock`` takes that value instead. When a
+        locked follower's leader stays free, :class:`MimicJointWarning` names
+        them. A ``<mimic>`` whose leader is not a movable joint is ignored (the
+        follower stays free, as Pinocchio reads it).
+
         Returns:
             The robot.
 
         Raises:
             UnknownRobotError: ``source`` is neither a file nor a known name.
-            RobotLoadError: The file is missing or invalid.
+            RobotLoadError: The file is missing or invalid (including a ``<mimic>``
+                with a non-numeric multiplier or offset, or mimic joints that
+                follow each other in a cycle).
             JointNotFound: A joint in ``lock`` does not exist.
             InputError: A lock value is not finite or outside the joint's limits.
+
+        Warns:
+            MimicJointWarning: Mimic followers were locked while their leader is free.
         """
         source_str = str(source)
         srdf, posture = None, None
@@ -124,7 +243,8 @@ class Robot:
             raise UnknownRobotError(source_str, Robot.available())
         dirs = [str(d) for d in (default_dirs if package_dirs is None else package_dirs)]
 
-        check_urdf(urdf, dirs)
+        root = check_urdf(urdf, dirs)
+        mimics = _mimic_joints(root, urdf)
         digest = _digest(urdf)
         try:
             model, collision_model = pin.buildModelsFromUrdf(
@@ -136,18 +256,25 @@ class Robot:
         q_reference = _reference_configuration(model, srdf, posture)
         robot = cls(name, urdf.resolve(), dirs, model, collision_model, q_reference)
         robot._source_digest = digest
-        return robot._locked(lock) if lock else robot
+        robot.mimics = mimics
+        names = robot.joint_names
+        followers = [f for f, m in mimics.items() if f in names and m.leader in names]
+        return robot._locked(dict(lock or {}), mimics) if lock or followers else robot
 
-    def _locked(self, lock: Mapping[str, float]) -> Robot:
-        """A new robot with the joints in ``lock`` fixed at the given values."""
+    def _locked(
+        self, lock: Mapping[str, float], mimics: Mapping[str, Mimic] | None = None
+    ) -> Robot:
+        """A new robot with the joints in ``lock`` fixed at the given values.
+
+        Mimic followers (``mimics``) not in ``lock`` are locked too, at the value
+        their leader implies (see :meth:`load`).
+        """
         q_full = self.q_reference
-        joint_ids = []
+        values: dict[str, float] = {}
         for joint_name, value in lock.items():
-            joint_id = self.joint_id(joint_name)
-            joint = self.model.joints[joint_id]
-            q_slice = slice(joint.idx_q, joint.idx_q + joint.nq)
+            joint = self.model.joints[self.joint_id(joint_name)]
             low, high = self.lower[joint.idx_q], self.upper[joint.idx_q]
-            continuous = joint.nq == 2 and joint.nv == 1  # stored as (cos, sin)
+            continuous = joint_kind(joint) == CONTINUOUS
             try:
                 value = float(value)
             except (TypeError, ValueError):
@@ -155,10 +282,35 @@ class Robot:
             if joint.nv != 1 or not (math.isfinite(value) and (continuous or low <= value <= high)):
                 expected = f"a value within the joint's limits [{low:g}, {high:g}]"
                 raise InputError(f"lock[{joint_name!r}]", expected, got=value)
+            values[joint_name] = value
+        implied = self._mimic_values(mimics or {}, values)
+        values.update({follower: value for follower, (_, value) in implied.items()})
+        free_leaders = {f: lv for f, lv in implied.items() if lv[0] not in values}
+        joint_ids = []
+        for joint_name, value in values.items():
+            joint_id = self.model.getJointId(joint_name)
+            joint = self.model.joints[joint_id]
+            q_slice = slice(joint.idx_q, joint.idx_q + joint.nq)
+            continuous = joint_kind(joint) == CONTINUOUS
             q_full[q_slice] = (math.cos(value), math.sin(value)) if continuous else value
             joint_ids.append(joint_id)
         if len(joint_ids) == self.model.njoints - 1:
             raise InputError("lock", "at least one joint left free", got=list(lock))
+        if free_leaders:
+            listing = "; ".join(
+                f"{f!r} = {v:.6g} {self._unit_of(f)} (mimics {lead!r})"
+                for f, (lead, v) in free_leaders.items()
+            )
+            warnings.warn(
+                MimicJointWarning(
+                    f"{self.name}: mimic joint(s) locked at the value their leader's reference "
+                    f"implies, the leader left free (clik moves every joint independently, so "
+                    f"the follower does not follow): {listing}; lock the leader too to keep "
+                    "them consistent",
+                    free_leaders,
+                ),
+                stacklevel=3,
+            )
         model, (collision_model,) = pin.buildReducedModel(
             self.model, [self.collision_model], sorted(joint_ids), q_full
         )
@@ -170,7 +322,54 @@ class Robot:
         )
         robot._reduction = (self.model, sorted(joint_ids), q_full)
         robot._source_digest = self._source_digest
+        robot.mimics = dict(self.mimics)
+        robot.locked = values
         return robot
+
+    def _mimic_values(
+        self, mimics: Mapping[str, Mimic], values: Mapping[str, float]
+    ) -> dict[str, tuple[str, float]]:
+        """Follower -> (leader, value) for the mimic followers to lock.
+
+        Followers in ``values`` (locked by the user) and those whose leader is not
+        a movable joint are left out. A leader that is itself a follower is
+        resolved first. Values [rad or m] are clipped into the follower's limits.
+        """
+        names = set(self.joint_names)
+        todo = {f: m for f, m in mimics.items() if f in names and m.leader in names}
+        todo = {f: m for f, m in todo.items() if f not in values}
+        out: dict[str, tuple[str, float]] = {}
+
+        def leader_value(name: str, chain: tuple[str, ...]) -> float:
+            if name in values:
+                return float(values[name])
+            if name in todo:
+                return resolve(name, chain)
+            joint = self.model.joints[self.model.getJointId(name)]
+            q = self._q_reference[joint.idx_q : joint.idx_q + joint.nq]
+            return math.atan2(q[1], q[0]) if joint_kind(joint) == CONTINUOUS else float(q[0])
+
+        def resolve(follower: str, chain: tuple[str, ...] = ()) -> float:
+            if follower in out:
+                return out[follower][1]
+            if follower in chain:
+                cycle = " -> ".join(repr(n) for n in (*chain, follower))
+                raise RobotLoadError(
+                    self.source_path or self.name, f"mimic joints follow each other: {cycle}"
+                )
+            mimic = todo[follower]
+            value = mimic.multiplier * leader_value(mimic.leader, (*chain, follower)) + mimic.offset
+            joint = self.model.joints[self.model.getJointId(follower)]
+            if joint_kind(joint) != CONTINUOUS:
+                low = float(self.model.lowerPositionLimit[joint.idx_q])
+                high = float(self.model.upperPositionLimit[joint.idx_q])
+                value = min(max(value, low), high)
+            out[follower] = (mimic.leader, value)
+            return value
+
+        for follower in todo:
+            resolve(follower)
+        return out
 
     @staticmethod
     def available() -> dict[str, str]:
@@ -234,6 +433,38 @@ class Robot:
     def joint_names(self) -> list[str]:
         """Names of the movable joints in configuration order ("universe" excluded)."""
         return list(self.model.names[1:])
+
+    @property
+    def joint_kinds(self) -> dict[str, str]:
+        """Kind of each movable joint, by name: ``"revolute"``, ``"prismatic"``,
+        ``"continuous"`` or ``"other"`` (see :data:`REVOLUTE`...)."""
+        return {
+            name: joint_kind(joint)
+            for name, joint in zip(self.joint_names, self.model.joints[1:], strict=True)
+        }
+
+    @property
+    def q_units(self) -> list[str]:
+        """Unit of each configuration value, shape (nq,): ``"rad"`` (revolute),
+        ``"m"`` (prismatic) or ``""`` (a continuous joint's cos and sin, other joints)."""
+        units = [""] * self.nq
+        for joint in self.model.joints[1:]:
+            kind = joint_kind(joint)
+            if kind in (REVOLUTE, PRISMATIC):
+                units[joint.idx_q] = "rad" if kind == REVOLUTE else "m"
+        return units
+
+    @property
+    def q_joint_names(self) -> list[str]:
+        """Name of the joint of each configuration value, shape (nq,)."""
+        names = [""] * self.nq
+        for name, joint in zip(self.joint_names, self.model.joints[1:], strict=True):
+            names[joint.idx_q : joint.idx_q + joint.nq] = [name] * joint.nq
+        return names
+
+    def _unit_of(self, name: str) -> str:
+        """``"m"`` for a prismatic joint, else ``"rad"``."""
+        return "m" if self.joint_kinds.get(name) == PRISMATIC else "rad"
 
     @property
     def frame_names(self) -> list[str]:
@@ -315,6 +546,9 @@ class Robot:
     def check_configuration(self, q: object, field: str = "q0") -> np.ndarray:
         """Convert a configuration to a float array and check it.
 
+        A :class:`JointValues` (a scenario's ``initial.q``) is converted with
+        :meth:`configuration`, in its unit.
+
         Args:
             q: Joint values [rad or m], ``nq`` of them.
             field: Name of the input, used in the error message.
@@ -325,15 +559,67 @@ class Robot:
         Raises:
             InputError: Not ``nq`` finite numbers.
         """
+        if isinstance(q, JointValues):
+            return self.configuration(q.written, q.unit, field)
         expected = f"an array of {self.nq} finite joint values [rad or m] for {self.name}"
-        try:
-            array = np.array(q, dtype=float)
-        except (TypeError, ValueError):
-            raise InputError(field, expected, got=q) from None
-        if array.shape != (self.nq,) or not np.all(np.isfinite(array)):
-            got = array.tolist() if array.size <= 20 else f"an array of shape {array.shape}"
-            raise InputError(field, expected, got=got)
+        array = _float_array(q, field, expected)
+        if array.shape != (self.nq,):
+            raise InputError(field, expected, got=_shown(array))
         return array
+
+    def configuration(self, values: object, unit: str = "rad", field: str = "q0") -> np.ndarray:
+        """A configuration from joint values as a user writes them.
+
+        Only angles are converted from degrees: revolute joints' values and
+        continuous joints' angles. Prismatic joints' values are metres whatever
+        ``unit`` says; a continuous joint's (cos, sin) pair is not an angle and
+        is kept as it is.
+
+        Args:
+            values: ``nq`` values (Pinocchio's configuration, a continuous joint as
+                its (cos, sin)) or, for a robot whose only multi-value joints are
+                continuous (``nq > nv``), ``nv`` values, a continuous joint as its
+                angle [``unit``].
+            unit: ``"rad"`` or ``"deg"``, the unit of revolute (and continuous) angles.
+            field: Name of the input, used in the error message.
+
+        Returns:
+            A new float array of shape (nq,) [rad or m].
+
+        Raises:
+            InputError: A bad unit, or not ``nq`` (or ``nv``) finite numbers.
+        """
+        scale = _unit_scale(unit, f"{field} unit")
+        joints = self.model.joints[1:]
+        angle_form = self.nq != self.nv and all(
+            joint_kind(j) in (REVOLUTE, PRISMATIC, CONTINUOUS) for j in joints
+        )
+        angle_unit = "deg" if unit == "deg" else "rad"
+        expected = (
+            f"an array of {self.nq} finite joint values [{angle_unit} for revolute joints, "
+            f"m for prismatic ones] for {self.name}"
+        )
+        if angle_form:
+            expected += f" (or {self.nv}, a continuous joint as its angle)"
+        array = _float_array(values, field, expected)
+        if array.shape == (self.nq,):
+            q = array.copy()
+            for joint in joints:
+                if joint_kind(joint) == REVOLUTE:
+                    q[joint.idx_q] *= scale
+            return q
+        if angle_form and array.shape == (self.nv,):
+            q = np.empty(self.nq)
+            for joint in joints:
+                value = float(array[joint.idx_v])
+                kind = joint_kind(joint)
+                if kind == CONTINUOUS:
+                    angle = value * scale
+                    q[joint.idx_q : joint.idx_q + 2] = (math.cos(angle), math.sin(angle))
+                else:
+                    q[joint.idx_q] = value * scale if kind == REVOLUTE else value
+            return q
+        raise InputError(field, expected, got=_shown(array))
 
     def check_within_limits(
         self, q: np.ndarray, field: str = "q0", tolerance: float = 1e-9
@@ -360,23 +646,82 @@ class Robot:
         """
         outside = []
         for name, joint in zip(self.joint_names, self.model.joints[1:], strict=True):
-            if joint.nq != 1 or joint.nv != 1:
+            kind = joint_kind(joint)
+            if kind not in (REVOLUTE, PRISMATIC):
                 continue  # continuous (cos, sin), spherical, free: no position limits
             i = joint.idx_q
             low = self.model.lowerPositionLimit[i]
             high = self.model.upperPositionLimit[i]
             value = float(q[i])
             if value < low - tolerance or value > high + tolerance:
-                outside.append(f"{name!r} = {value:.6g} not in [{low:.6g}, {high:.6g}]")
+                text = f"{name!r} = {value:.6g} not in [{low:.6g}, {high:.6g}]"
+                if kind == PRISMATIC:
+                    text += " m"
+                else:
+                    deg = [math.degrees(v) for v in (value, low, high)]
+                    text += f" rad ({deg[0]:.4g} deg not in [{deg[1]:.4g}, {deg[2]:.4g}] deg)"
+                outside.append(text)
         if outside:
             raise InfeasibleError(
                 field,
-                f"the configuration is outside the joint limits of {self.name} "
-                f"[rad or m]: {'; '.join(outside)}",
+                f"the configuration is outside the joint limits of {self.name}: "
+                f"{'; '.join(outside)}",
             )
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, nq={self.nq}, nv={self.nv})"
+
+
+def _float_array(values: object, field: str, expected: str) -> np.ndarray:
+    """``values`` as a 1-D (or any shape) float array of finite numbers, else InputError."""
+    try:
+        array = np.array(values, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(field, expected, got=values) from None
+    if not np.all(np.isfinite(array)):
+        raise InputError(field, expected, got=_shown(array))
+    return array
+
+
+def _shown(array: np.ndarray) -> object:
+    """An array as shown in an error message: its values, or its shape when large."""
+    return array.tolist() if array.size <= 20 else f"an array of shape {array.shape}"
+
+
+def _mimic_joints(root: object, urdf: Path) -> dict[str, Mimic]:
+    """The URDF's ``<joint><mimic joint=... multiplier=... offset=.../></joint>`` entries.
+
+    Raises:
+        RobotLoadError: A ``<mimic>`` without a joint name, or with a multiplier or
+            offset that is not a finite number.
+    """
+    mimics: dict[str, Mimic] = {}
+    for joint in root.findall("joint"):  # type: ignore[attr-defined]
+        element = joint.find("mimic")
+        if element is None:
+            continue
+        name = joint.get("name")
+        leader = element.get("joint")
+        if not leader:
+            raise RobotLoadError(
+                urdf, f"joint {name!r} has a <mimic> without joint=...", line=element.sourceline
+            )
+        numbers = {}
+        for attribute, default in (("multiplier", 1.0), ("offset", 0.0)):
+            text = element.get(attribute)
+            try:
+                value = default if text is None else float(text)
+            except ValueError:
+                value = math.nan
+            if not math.isfinite(value):
+                raise RobotLoadError(
+                    urdf,
+                    f"joint {name!r} has a <mimic> {attribute} {text!r}, expected a finite number",
+                    line=element.sourceline,
+                )
+            numbers[attribute] = value
+        mimics[name] = Mimic(leader, numbers["multiplier"], numbers["offset"])
+    return mimics
 
 
 def _q_slice(model: pin.Model, joint_id: int) -> slice:

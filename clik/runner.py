@@ -7,6 +7,7 @@ timing, an unknown joint in a lock or override) are re-raised as
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,7 @@ from clik.errors import (
     JointNotFound,
     ScenarioError,
 )
+from clik.reach import reach_bound
 from clik.result import TrackingResult
 from clik.robot import Robot
 from clik.scenario import Scenario, load_scenario
@@ -105,6 +107,7 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
     try:
         trajectory = build_trajectory(scenario.trajectory, task, start)
     except InputError as exc:
+        _check_goal_reach(scenario, robot, task)  # name the real cause first
         raise _where(scenario, f"trajectory.{exc.field}", exc) from None
     constraints = None
     if scenario.obstacles or any(
@@ -126,6 +129,25 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
     except InputError as exc:
         raise _where(scenario, f"solver.{exc.field}", exc) from None
     return Run(scenario, robot, task, trajectory, tracker, q0)
+
+
+def _check_goal_reach(scenario: Scenario, robot: Robot, task: Task) -> None:
+    """Raise :class:`InfeasibleError` when the scenario's goal lies beyond the frame's reach.
+
+    A trajectory that cannot be built (e.g. its cruise speed cannot cover the distance in
+    its duration) often has an unreachable goal: that is the error worth reading.
+    """
+    goal = scenario.trajectory.get("goal")
+    if goal is None or not task.has_position:
+        return
+    center, reach, first = reach_bound(robot, task.frame_id)
+    distance = float(np.linalg.norm(np.asarray(goal, dtype=float)[:3] - center))
+    if math.isfinite(reach) and distance > reach + 1e-9:
+        raise InfeasibleError(
+            f"{scenario.file}: trajectory.goal",
+            f"the goal is out of reach: it lies {distance:.4g} m from joint {first!r}, farther "
+            f"than the {reach:.4g} m that frame {task.frame!r} can reach",
+        )
 
 
 def build_trajectory(spec: dict[str, Any], task: Task, start: pin.SE3) -> Trajectory:

@@ -7,7 +7,14 @@ out-of-range value raises :class:`~clik.errors.ScenarioError` naming the file,
 the key path (e.g. ``trajectory.duration``) and what was expected.
 
 Angles are given in the table's ``unit`` (``"rad"`` by default, or
-``"deg"``) and converted once, here.
+``"deg"``) and converted once, here, except joint values: ``unit`` applies to
+revolute (and continuous) joints only, prismatic joints' values are metres, and
+which joint is which is known only with the robot. So ``initial.q`` is kept as
+a :class:`~clik.robot.JointValues` (the values as written and their unit) that
+:meth:`Robot.check_configuration <clik.robot.Robot.check_configuration>`
+converts per joint, and ``[constraints.joint_limits]`` keeps its overrides as written
+beside their conversion to radians, for :func:`~clik.constraints.build.build_constraints`
+to pick per joint.
 
 A scenario is data only: TOML has no code, no includes and no variables, and
 no key here names a file to read but ``robot.source``, ``robot.package_dirs``
@@ -26,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from clik.errors import ClikError, ScenarioError
+from clik.robot import JointValues
 from clik.schema import Table
 from clik.tracking import MAX_STEPS
 
@@ -40,13 +48,26 @@ SHAPES = ("sphere", "box", "capsule", "cylinder", "mesh")
 UNITS = ("rad", "deg")
 
 
+PRISMATIC_THRESHOLD = 0.005
+"""Default ``[constraints.joint_limits] prismatic_threshold`` [m]."""
+
+
 def _angle_scale(table: Table) -> float:
     return math.pi / 180.0 if table.string("unit", "rad", UNITS) == "deg" else 1.0
 
 
 @dataclass
 class Scenario:
-    """A validated scenario. Angles are in radians, lengths in metres, times in seconds."""
+    """A validated scenario. Angles are in radians, lengths in metres, times in seconds.
+
+    Joint values are the exception (see the module's docstring): ``initial_q`` is
+    a :class:`~clik.robot.JointValues` (a list of the values scaled as angles,
+    with ``written`` and ``unit``) or None for the reference configuration, and
+    ``constraints["joint_limits"]`` has ``override`` (scaled as angles [rad]),
+    ``override_as_written`` (in ``unit`` for revolute joints, metres for
+    prismatic ones), ``unit``, ``threshold`` [rad] (revolute joints) and
+    ``prismatic_threshold`` [m].
+    """
 
     file: Path
     name: str
@@ -106,12 +127,9 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
     rob.done()
 
     ini = top.table("initial")
-    scale = _angle_scale(ini)
+    unit = ini.string("unit", "rad", UNITS)
     q_raw = ini.raw("q", "reference")
-    if q_raw == "reference":
-        initial_q = None
-    else:
-        initial_q = [v * scale for v in ini.vector("q")]
+    initial_q = None if q_raw == "reference" else JointValues(ini.vector("q"), unit)
     ini.done()
 
     tsk = top.table("task", required=True)
@@ -254,22 +272,38 @@ def _constraints(ct: Table) -> dict[str, Any]:
     }
     obs.done()
     jl = ct.table("joint_limits")
+    unit = jl.string("unit", "rad", UNITS)
     scale = _angle_scale(jl)
-    override: dict[str, dict[str, float]] = {}
+    written: dict[str, dict[str, float]] = {}
     ov = jl.table("override")
     for joint in list(ov.data):
         sub = ov.table(joint)
         lim = {k: sub.number(k, None) for k in ("lower", "upper")}
         sub.done()
-        override[joint] = {k: v * scale for k, v in lim.items() if v is not None}
+        written[joint] = {k: float(v) for k, v in lim.items() if v is not None}
     out["joint_limits"] = {
         "enabled": jl.boolean("enabled", False),
         "threshold": jl.number(
-            "threshold", 2.0 if scale != 1.0 else math.radians(2.0), minimum=0.0, strict=True
+            "threshold",
+            2.0 if scale != 1.0 else math.radians(2.0),
+            minimum=0.0,
+            strict=True,
+            unit=f"[{unit}] (revolute joints)",
         )
         * scale,
+        "prismatic_threshold": float(
+            jl.number(
+                "prismatic_threshold",
+                PRISMATIC_THRESHOLD,
+                minimum=0.0,
+                strict=True,
+                unit="[m] (prismatic joints)",
+            )
+        ),
         "gain": jl.number("gain", None, minimum=0.0, strict=True, unit="[1/s]"),
-        "override": override,
+        "override": {j: {k: v * scale for k, v in lim.items()} for j, lim in written.items()},
+        "override_as_written": written,
+        "unit": unit,
     }
     jl.done()
     sc = ct.table("self_collision")

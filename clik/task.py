@@ -8,7 +8,7 @@ may track its position plus one axis of orientation.
 Convention (one for the whole package, ``LOCAL_WORLD_ALIGNED``): velocities
 and Jacobian rows are expressed in the world frame at the frame's origin.
 
-- Position error (METHOD.md, ``e = x_d - x``): ``e_p = p_d - p`` [m].
+- Position error (docs/method.md, ``e = x_d - x``): ``e_p = p_d - p`` [m].
 - Orientation error: ``e_r = log3(R_d R^T)`` [rad], the rotation vector, in
   the world frame, that turns the current orientation ``R`` into ``R_d``.
   Its time derivative is ``omega_d - omega`` to first order in ``|e_r|``, so

@@ -1,9 +1,13 @@
 """Tracking: integrate the closed-loop law along a reference trajectory.
 
-One iteration per sample (METHOD.md, "Discrete time"): at ``t_k`` compute the
-direct kinematics and Jacobian at ``q_k``, the error ``e_k = x_d(t_k) - x(q_k)``,
-the joint velocity ``qdot_k`` from the law, then integrate on the
-configuration manifold, ``q_{k+1} = q_k (+) qdot_k dt`` (``pin.integrate``).
+One iteration per sample (docs/method.md, "Discrete time"), each a short step:
+
+1. kinematics: the frame's placement and Jacobian at ``q_k`` (3);
+2. task error ``e_k = x_d(t_k) - x(q_k)`` (6) on the task's rows;
+3. constraint rows (13)-(19) into the extended task (24)-(25);
+4. the law, (9), (8) or (10), gives ``qdot_k``;
+5. stop checks (divergence, instability, deadlock) and limits crossed (violations);
+6. recording, then ``q_{k+1} = q_k (+) qdot_k dt`` (``pin.integrate``).
 """
 
 from __future__ import annotations
@@ -18,21 +22,21 @@ import numpy as np
 import pinocchio as pin
 
 from clik.errors import InputError
+from clik.extended_task import ExtendedTask
 from clik.gains import row_gains, stability_margin
-from clik.laws import (
-    LawName,
-    check_law,
-    nonlinear,
-    pseudoinverse,
-    transpose,
-)
+from clik.laws import LawName, check_law, nonlinear, prioritized, transpose
+from clik.reach import reach_bound
+from clik.recording import Recorder
 from clik.reference_stream import REFERENCE_CHUNK, ReferenceChunks
 from clik.result import TrackingResult
+from clik.stop_checks import StopChecks, StopSettings
 from clik.task import Task
 from clik.trajectory import Trajectory, time_grid
+from clik.violations import JointRange, ViolationMonitor
 
 if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
+    from clik.constraints.constraint_run import ConstraintRun
 
 ProgressCallback = Callable[[int, int], None]
 
@@ -41,6 +45,10 @@ MAX_STEPS = 100_000_000
 """Largest run, ``(duration + settle) / dt + 1`` samples (about 15 minutes at 8 us per
 step): a typo in ``dt`` fails at once, not as a run that never ends or an allocation
 that cannot succeed."""
+
+
+class ReachWarning(UserWarning):
+    """The position reference leaves the frame's reach: the run will end in a deadlock."""
 
 
 class StabilityWarning(UserWarning):
@@ -58,17 +66,19 @@ def _positive(value: float, field: str, unit: str) -> float:
 
 
 class Tracker:
-    """The CLIK loop for one robot, task and law, with its arrays preallocated.
+    """The CLIK loop for one robot, task and law.
 
-    Build once, then call :meth:`run` with a trajectory (and again with
-    another one): nothing is rebuilt per step.
+    Build once, then call :meth:`run` with a trajectory (and again with another
+    one). Each run owns its extended task, its record and its constraint state
+    (:meth:`ConstraintSet.start`), so trackers and runs never share mutable state.
 
     Args:
         task: The task (frame, kind, mask).
         law: ``"transpose"`` (9), ``"nonlinear"`` (8) or ``"pseudoinverse"`` (10).
         gain: ``alpha`` [1/s], a scalar or one value per task row.
         dt: Sample time [s].
-        damping: ``lambda`` of the damped pseudoinverse (law (10) only).
+        damping: Constant damping ``lambda_0`` of law (10) (on top of the automatic
+            damping near singularities, see :func:`clik.laws.damped_solve`).
         beta_max: Bound on the nonlinear law's extra gain [1/s] (default ``2 alpha``).
         constraints: Optional constraint rows (obstacles, joint ranges), eq. (20)-(25).
     """
@@ -92,35 +102,38 @@ class Tracker:
         if not math.isfinite(damping) or damping < 0.0:
             raise InputError("damping", "a finite number >= 0", damping)
         self.damping = damping
-        alpha = float(np.max(self.K_task))
+        self.alpha = float(np.max(self.K_task))
         self.beta_max = (
-            2.0 * alpha if beta_max is None else _positive(beta_max, "beta_max", "[1/s]")
+            2.0 * self.alpha if beta_max is None else _positive(beta_max, "beta_max", "[1/s]")
         )
         self.constraints = constraints
-        nv, m = self.robot.nv, task.m
-        rows = m + (constraints.max_rows if constraints is not None else 0)
-        self.J_e = np.zeros((rows, nv))
-        self.e_e = np.zeros(rows)
-        self.K_e = np.zeros(rows)
-        self.ff_e = np.zeros(rows)
-        self.K_e[:m] = self.K_task
-        self._work = np.zeros(rows)
+        m, nv = task.m, self.robot.nv
+        limit = constraints.row_limit(m, self.law) if constraints is not None else 0
+        self.rows = m + limit
+        self.out_of_reach = ""
+        self._b = np.zeros(self.rows)
+        self._work = np.zeros(self.rows)
         self._jte = np.zeros(nv)
-        self._e6 = np.zeros(6)
-        if constraints is not None:
-            constraints.bind(self)
 
-    # -- one step ----------------------------------------------------------------------
+    # -- the law -----------------------------------------------------------------------
 
-    def law_velocity(self, r: int, out: np.ndarray) -> np.ndarray:
-        """Joint velocity of the law on the first ``r`` rows of the extended task."""
-        J, e, K, ff = self.J_e[:r], self.e_e[:r], self.K_e[:r], self.ff_e[:r]
-        work = self._work[:r]
+    def law_velocity(self, ext: ExtendedTask, r: int, out: np.ndarray) -> float:
+        """Joint velocity [rad/s] of the law on the first ``r`` rows of the extended task.
+
+        Returns:
+            Law (10): the fraction of the task's demand the law could not realise
+            (:func:`clik.laws.prioritized`); laws (9) and (8): 0.
+        """
+        m = ext.m
+        if self.law == "pseudoinverse":
+            b = ext.demand(r, self._b[:r])
+            return prioritized(ext.J[:m], b[:m], ext.J[m:r], b[m:r], out, self.damping, self.dt)
+        J, e, K, ff, work = ext.J[:r], ext.e[:r], ext.K[:r], ext.ff[:r], self._work[:r]
         if self.law == "transpose":
-            return transpose(J, e, K, ff, out, work)
-        if self.law == "nonlinear":
-            return nonlinear(J, e, K, ff, out, work, self._jte, self.beta_max)
-        return pseudoinverse(J, e, K, ff, out, work, self.damping)
+            transpose(J, e, K, ff, out, work)
+        else:
+            nonlinear(J, e, K, ff, out, work, self._jte, self.beta_max)
+        return 0.0
 
     # -- the loop ----------------------------------------------------------------------
 
@@ -142,23 +155,32 @@ class Tracker:
         """Track ``trajectory`` from ``q0`` (default: the robot's reference configuration).
 
         Args:
-            trajectory: Desired task trajectory; sampled once on the time grid.
+            trajectory: Desired task trajectory; sampled chunk by chunk on the time grid.
             q0: Initial configuration (nq,).
             record_every: Keep every k-th sample (and the last) in the result's arrays;
                 scalars such as ``max_task_error`` still see every sample.
             progress: Called as ``progress(k, N)`` about a hundred times during the run.
             deadlock_window: Time [s] the deadlock condition must hold before stopping.
-            deadlock_ratio: Deadlock when ``|J_e^T K e_e| <= ratio |J_e|_F |K e_e|``...
-            deadlock_error: ... while the task error norm exceeds this [m or rad].
+            deadlock_ratio: Laws (9), (8): deadlock when
+                ``|J_e^T K e_e| <= ratio |J_e|_F |K e_e|``...
+            deadlock_error: ... while the task error norm exceeds this [m or rad] (law
+                (10): while most of the task's demand is not realised).
+            max_joint_step: A joint step ``|qdot| dt`` above this [rad or m] stops the run
+                with status ``diverged``; checked every sample.
+            settle: Extra time [s] after the trajectory's end, holding its final value.
             stall_window: With the reference at rest, a task error that falls by less
                 than ``stall_progress`` (a fraction) over this time [s] is a deadlock too.
             stall_progress: See ``stall_window``.
-            settle: Extra time [s] after the trajectory's end, holding its final value.
-            max_joint_step: A joint step ``|qdot| dt`` above this [rad or m] stops the run
-                with status ``diverged`` (explicit Euler blowing up).
+
+        Raises:
+            InputError: A bad argument.
+            InfeasibleError: ``q0`` outside the robot's joint limits.
+
+        Warns:
+            ReachWarning: A position of the reference lies beyond the frame's reach.
+            StabilityWarning: The gains break explicit Euler's bound at ``q0``.
         """
-        robot, task = self.robot, self.task
-        model, data = robot.model, robot.data
+        robot = self.robot
         q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
         robot.check_within_limits(q, "q0")
         if not isinstance(record_every, int | np.integer) or record_every < 1:
@@ -174,256 +196,49 @@ class Tracker:
                 self.dt,
             )
         t = time_grid(trajectory.duration + settle, self.dt)
-        N, m, nv, dt = t.shape[0], task.m, robot.nv, self.dt
-        fid, rows, sl = task.frame_id, task.rows, task._slice
-        has_pos, has_rot = task.has_position, task.has_orientation
-        # The reference is sampled in chunks: a 10^6-sample run never holds it whole.
-        chunk = ReferenceChunks(task, trajectory, t, REFERENCE_CHUNK)
+        chunks = self._reference(trajectory, t)
+        self._warn_stability(q)
+        settings = StopSettings(
+            deadlock_window, deadlock_ratio, deadlock_error, max_joint_step, stall_window,
+            stall_progress,
+        )  # fmt: skip
+        return _Run(self, t, chunks, int(record_every), settings, progress).execute(q)
 
-        self._warn_stability(q, m)
-        constraints = self.constraints
-
-        # Preallocated record: every record_every-th sample, and the last one.
-        n_rec = (N - 1) // record_every + 1 + (1 if (N - 1) % record_every else 0)
-        rec_idx = np.empty(n_rec, dtype=np.intp)
-        rec_q = np.empty((n_rec, robot.nq))
-        rec_qdot = np.empty((n_rec, nv))
-        rec_qddot = np.zeros((n_rec, nv))
-        rec_pos = np.empty((n_rec, 3))
-        rec_ref = np.empty((n_rec, 3)) if has_pos else None
-        rec_err = np.empty(n_rec)
-        rec_rot_err = np.empty(n_rec) if (has_rot and has_pos) else None
-        if constraints is not None:
-            constraints.reset(q, t, n_rec)
-        rec_active = np.zeros(n_rec, dtype=np.int16) if constraints is not None else None
-        rec_dist = np.full(n_rec, np.inf) if constraints is not None else None
-        decimated = record_every > 1
-        joint_min = q.copy()
-        joint_max = q.copy()
-        qdot_prev = np.zeros(nv)
-
-        J_e, e_e, ff_e = self.J_e, self.e_e, self.ff_e
-        J_task, e_task = J_e[:m], e_e[:m]
-        e6, e6_pos, e6_rot = self._e6, self._e6[:3], self._e6[3:]
-        # Without constraints a full pose task runs the law on Pinocchio's J and e6 directly.
-        direct = constraints is None and m == 6
-        qdot = np.zeros(nv)
-        dq = np.zeros(nv)
-        max_err = 0.0
-        err = 0.0
-        status, reason = "completed", f"reached the end of the trajectory at t = {t[-1]:.6g} s"
-        window = max(1, round(deadlock_window / dt))
-        check_every = 10
-        stuck = 0
-        stall_steps = max(1, round(stall_window / dt))
-        stall_k, stall_err = -1, 0.0
-        progress_every = max(1, N // 100)
-        j = 0  # next record slot
-        steps = 0
-        LWA = pin.LOCAL_WORLD_ALIGNED
-        # Live views on the frame's placement in data (updated by every kinematics call).
-        pin.framesForwardKinematics(model, data, q)
-        translation, rotation_T = data.oMf[fid].translation, data.oMf[fid].rotation.T
-        P_d = R_d = FF = at_rest = None
-        c0 = c1 = 0
-        law = self.law
-        K_task, work, damping = self.K_task, self._work[:m], self.damping
-        start = time.perf_counter()
-        with np.errstate(invalid="ignore", divide="ignore"):
-            for k in range(N):
-                if k == c1:
-                    c0, c1, P_d, R_d, FF, at_rest = chunk.load(k)
-                kk = k - c0
-                if constraints is None:
-                    J6 = pin.computeFrameJacobian(model, data, q, fid, LWA)
-                else:  # every joint's kinematics and Jacobian: constraint rows need them
-                    pin.computeJointJacobians(model, data, q)
-                    pin.updateFramePlacement(model, data, fid)
-                    J6 = pin.getFrameJacobian(model, data, fid, LWA)
-                if has_pos:
-                    np.subtract(P_d[kk], translation, out=e6_pos)
-                if has_rot:
-                    e6_rot[:] = pin.log3(R_d[kk].dot(rotation_T))
-                if direct:
-                    r = m
-                    if law == "pseudoinverse":
-                        pseudoinverse(J6, e6, K_task, FF[kk], qdot, work, damping)
-                    elif law == "transpose":
-                        transpose(J6, e6, K_task, FF[kk], qdot, work)
-                    else:
-                        nonlinear(J6, e6, K_task, FF[kk], qdot, work, self._jte, self.beta_max)
-                else:
-                    if sl is not None:
-                        e_task[:] = e6[sl]
-                        J_task[:] = J6[sl]
-                    else:
-                        np.take(e6, rows, out=e_task)
-                        np.take(J6, rows, axis=0, out=J_task)
-                    ff_e[:m] = FF[kk]
-                    r = m if constraints is None else m + constraints.update(k, q)
-                    self.law_velocity(r, qdot)
-                err = math.sqrt(e6_pos.dot(e6_pos)) if has_pos else math.sqrt(e6_rot.dot(e6_rot))
-                if err > max_err:
-                    max_err = err
-                stop = False
-                if k % check_every == 0:
-                    if direct:  # the deadlock test reads the task rows from J_e, e_e
-                        J_task[:] = J6
-                        e_task[:] = e6
-                    jump = float(np.abs(qdot).max()) * dt
-                    if not (math.isfinite(err) and math.isfinite(jump)):
-                        status, stop = "diverged", True
-                        reason = f"non-finite joint velocity or task error at t = {t[k]:.6g} s"
-                    elif jump > max_joint_step:
-                        status, stop = "diverged", True
-                        reason = self._divergence_reason(t[k], jump, r, err)
-                    elif err > deadlock_error and self._deadlocked(r, deadlock_ratio):
-                        stuck += check_every
-                        if stuck >= window:
-                            status, stop = "deadlock", True
-                            reason = self._deadlock_reason(t[k], err, r)
-                    else:
-                        stuck = 0
-                    # The same condition seen through its effect: at rest, the error stalls.
-                    if err > deadlock_error and at_rest[kk]:
-                        if stall_k < 0:
-                            stall_k, stall_err = k, err
-                        elif k - stall_k >= stall_steps:
-                            if err > (1.0 - stall_progress) * stall_err:
-                                status, stop = "deadlock", True
-                                reason = self._deadlock_reason(t[k], err, r) + (
-                                    f"; the error fell by less than {stall_progress:.0%} in "
-                                    f"{stall_window:g} s with the reference at rest"
-                                )
-                            stall_k, stall_err = k, err
-                    else:
-                        stall_k = -1
-                if k % record_every == 0 or k == N - 1 or stop:
-                    rec_idx[j] = k
-                    rec_q[j] = q
-                    rec_qdot[j] = qdot
-                    rec_pos[j] = translation
-                    rec_err[j] = err
-                    if rec_ref is not None:
-                        rec_ref[j] = P_d[kk]
-                    if rec_rot_err is not None:
-                        rec_rot_err[j] = math.sqrt(e6_rot.dot(e6_rot))
-                    if decimated:
-                        np.subtract(qdot, qdot_prev, out=rec_qddot[j])
-                    if constraints is not None:
-                        rec_active[j] = r - m
-                        rec_dist[j] = constraints.min_distance
-                        constraints.record(j)
-                    j += 1
-                if decimated:
-                    np.minimum(joint_min, q, out=joint_min)
-                    np.maximum(joint_max, q, out=joint_max)
-                    qdot_prev[:] = qdot
-                steps = k + 1
-                if stop:
-                    break
-                if progress is not None and k % progress_every == 0:
-                    progress(k, N)
-                if k + 1 < N:
-                    np.multiply(qdot, dt, out=dq)
-                    q = pin.integrate(model, q, dq)
-        wall = time.perf_counter() - start
-        if progress is not None:
-            progress(N if status == "completed" else steps, N)
-
-        if constraints is not None and status == "completed":
-            skipped = sorted(
-                {e["constraint"] for e in constraints.events if e["action"] == "skipped"}
+    def _reference(self, trajectory: Trajectory, t: np.ndarray) -> ReferenceChunks:
+        """The reference in chunks; a warning names a position beyond the frame's reach."""
+        task = self.task
+        center, reach, first = (None, math.inf, "")
+        if task.has_position:
+            center, reach, first = reach_bound(self.robot, task.frame_id)
+        finite = math.isfinite(reach)
+        chunks = ReferenceChunks(task, trajectory, t, REFERENCE_CHUNK, center if finite else None)
+        farthest, when = chunks.farthest
+        self.out_of_reach = ""
+        if finite and farthest > reach + 1e-9:
+            self.out_of_reach = (
+                f"the reference is out of reach: at t = {when:.6g} s it lies {farthest:.4g} m "
+                f"from joint {first!r}, farther than the {reach:.4g} m that frame "
+                f"{task.frame!r} can reach (the sum of the chain's link offsets)"
             )
-            if skipped:
-                reason += (
-                    f"; {len(skipped)} violated constraint(s) found no free row (more than "
-                    f"n - m at once) and were skipped: {', '.join(skipped)}"
-                )
-        n_rec = j  # fewer when the run stopped early
-        sl_rec = slice(0, n_rec)
-        rec_t = t[rec_idx[sl_rec]]
-        rec_q, rec_qdot = rec_q[sl_rec], rec_qdot[sl_rec]
-        if decimated:
-            rec_qddot = rec_qddot[sl_rec] / dt
-        else:  # backward differences, vectorised
-            rec_qddot = np.zeros_like(rec_qdot)
-            rec_qddot[1:] = np.diff(rec_qdot, axis=0) / dt
-            joint_min = rec_q.min(axis=0)
-            joint_max = rec_q.max(axis=0)
-        info = {
-            "robot": robot.name,
-            "frame": task.frame,
-            "task": task.kind,
-            "axes": task.axes,
-            "law": self.law,
-            "gain": [float(g) for g in self.K_task],
-            "dt": dt,
-            "record_every": record_every,
-            "duration": float(trajectory.duration),
-        }
-        result = TrackingResult(
-            t=rec_t,
-            q=rec_q,
-            qdot=rec_qdot,
-            qddot=rec_qddot,
-            position=rec_pos[sl_rec],
-            reference_position=None if rec_ref is None else rec_ref[sl_rec],
-            task_error_norm=rec_err[sl_rec],
-            orientation_error_norm=None if rec_rot_err is None else rec_rot_err[sl_rec],
-            status=status,
-            reason=reason,
-            wall_time_s=wall,
-            steps=steps,
-            max_task_error=max_err,
-            final_task_error=err,
-            joint_min=joint_min,
-            joint_max=joint_max,
-            min_obstacle_distance=None if rec_dist is None else rec_dist[sl_rec],
-            active_count=None if rec_active is None else rec_active[sl_rec],
-            info=info,
-            robot=robot,
-        )
-        if constraints is not None:
-            constraints.finish(result, n_rec)
-        return result
+            warnings.warn(self.out_of_reach, ReachWarning, stacklevel=4)
+        return chunks
 
-    # -- checks ------------------------------------------------------------------------
-
-    def _deadlocked(self, r: int, ratio: float) -> bool:
-        """Remark 2: ``|J_e^T K e_e|`` tiny relative to ``|J_e| |K e_e|``."""
-        J, Ke = self.J_e[:r], self.K_e[:r] * self.e_e[:r]
-        force = float(np.linalg.norm(J.T @ Ke))
-        scale = float(np.linalg.norm(J)) * float(np.linalg.norm(Ke))
-        return scale > 0.0 and force <= ratio * scale
-
-    def _divergence_reason(self, t: float, jump: float, r: int, err: float) -> str:
-        m = self.task.m
-        head = f"a joint moved {jump:.3g} rad in one step at t = {t:.6g} s (task error {err:.3g}): "
-        if r == m or self.constraints is None:
-            return head + (
-                "the gain is too high for dt (alpha dt lambda_max(J J^T) >= 2?), or the "
-                "reference leaves the workspace through a singularity"
-            )
-        names = ", ".join(self.constraints.active_names())
-        return head + (
-            f"with {r - m} active constraint row(s) ({names}) the extended Jacobian J_e is "
-            "near-singular (conflicting constraints) or the gain too high for dt"
-        )
-
-    def _deadlock_reason(self, t: float, err: float, r: int) -> str:
-        active = self.constraints.active_names() if self.constraints is not None else []
-        names = ", ".join(active) if active else "none"
-        return (
-            f"deadlock at t = {t:.6g} s: |J_e^T e_e| ~ 0 while the task error is {err:.4g} "
-            f"(Remark 2); active constraints: {names}"
-        )
-
-    def _warn_stability(self, q: np.ndarray, m: int) -> None:
+    def _warn_stability(self, q: np.ndarray) -> None:
+        """Warn when the gains break explicit Euler's bound at ``q0``."""
         if self.law == "pseudoinverse":
+            gains = [self.alpha]
+            if self.constraints is not None:
+                gains += [g for g in self.constraints.gains.values() if g is not None]
+            kdt = max(gains) * self.dt
+            if kdt >= 2.0:
+                warnings.warn(
+                    f"gain: K dt = {kdt:.3g} >= 2: law (10) is unstable (its error map is "
+                    "e_{k+1} = (1 - K dt) e_k); lower the gain or dt",
+                    StabilityWarning,
+                    stacklevel=3,
+                )
             return
-        J = self.task.jacobian(q)
-        margin = stability_margin(J, self.K_task, self.dt)
+        margin = stability_margin(self.task.jacobian(q), self.K_task, self.dt)
         if margin >= 2.0:
             warnings.warn(
                 f"gain: alpha dt lambda_max(J J^T) = {margin:.3g} >= 2 at q0: explicit Euler "
@@ -431,6 +246,280 @@ class Tracker:
                 StabilityWarning,
                 stacklevel=3,
             )
+
+
+class _Run:
+    """One run of a :class:`Tracker`: its arrays, constraint state, checks and record."""
+
+    def __init__(
+        self,
+        tracker: Tracker,
+        t: np.ndarray,
+        chunks: ReferenceChunks,
+        record_every: int,
+        settings: StopSettings,
+        progress: ProgressCallback | None,
+    ) -> None:
+        self.tr = tracker
+        self.task = task = tracker.task
+        self.robot = robot = tracker.robot
+        self.t, self.chunks, self.progress = t, chunks, progress
+        self.dt = tracker.dt
+        self.N = t.shape[0]
+        m, nv = task.m, robot.nv
+        self.ext = ExtendedTask(m, tracker.rows, nv, tracker.K_task)
+        cset = tracker.constraints
+        self.rec = Recorder(
+            self.N, record_every, robot.nq, nv, task.has_position,
+            task.has_orientation and task.has_position, cset is not None,
+        )  # fmt: skip
+        self.crun: ConstraintRun | None = (
+            None
+            if cset is None
+            else cset.start(m, tracker.law, tracker.alpha, t, self.rec.capacity)
+        )
+        self.monitor = ViolationMonitor(_joint_range(robot, cset))
+        self.checks = StopChecks(settings, tracker.law, self.dt)
+        self.e6 = np.zeros(6)
+        rows = task.rows
+        self.pos_rows = rows[rows < 3]
+        self.rot_rows = rows[rows >= 3]
+
+    def law(self, r: int, out: np.ndarray) -> float:
+        """The tracker's law on the first ``r`` rows of this run's extended task."""
+        return self.tr.law_velocity(self.ext, r, out)
+
+    # -- one sample, in steps ----------------------------------------------------------
+
+    def kinematics(self, q: np.ndarray) -> np.ndarray:
+        """Frame placement and Jacobian (6, nv) at ``q``, eq. (3), ``LOCAL_WORLD_ALIGNED``.
+
+        With constraints every joint's Jacobian is computed: their rows need them.
+        """
+        model, data, fid = self.robot.model, self.robot.data, self.task.frame_id
+        if self.crun is None:
+            return pin.computeFrameJacobian(model, data, q, fid, LWA)
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacement(model, data, fid)
+        return pin.getFrameJacobian(model, data, fid, LWA)
+
+    def task_rows(self, J6: np.ndarray, p_d: np.ndarray | None, R_d: np.ndarray | None,
+                  xdot_d: np.ndarray) -> None:  # fmt: skip
+        """Task error (6) ``e = (p_d - p, log3(R_d R^T))`` and rows of ``J`` into the task rows."""
+        placement = self.robot.data.oMf[self.task.frame_id]
+        e6, rows, m = self.e6, self.task.rows, self.task.m
+        if p_d is not None and self.task.has_position:
+            np.subtract(p_d, placement.translation, out=e6[:3])
+        if R_d is not None and self.task.has_orientation:
+            e6[3:] = pin.log3(R_d.dot(placement.rotation.T))
+        ext = self.ext
+        np.take(e6, rows, out=ext.e[:m])
+        np.take(J6, rows, axis=0, out=ext.J[:m])
+        ext.ff[:m] = xdot_d
+
+    def error_norms(self) -> tuple[float, float]:
+        """Norms of the task's own position rows [m] and orientation rows [rad].
+
+        The first is the run's task error (for a pure orientation task, the orientation
+        rows'); only the rows the task keeps count (a mask ``["x"]`` is the x error).
+        """
+        e6 = self.e6
+        rot = math.sqrt(float(np.sum(e6[self.rot_rows] ** 2))) if self.rot_rows.size else 0.0
+        if not self.pos_rows.size:
+            return rot, rot
+        return math.sqrt(float(np.sum(e6[self.pos_rows] ** 2))), rot
+
+    def stop(self, k: int, qdot: np.ndarray, err: float, r: int, blocked: float,
+             at_rest: bool) -> tuple[str, str] | None:  # fmt: skip
+        """The status and reason when the run must stop at sample ``k``, else None."""
+        tk = float(self.t[k])
+        checks = self.checks
+        why = checks.divergence(tk, qdot, err)
+        if why is None:
+            why = checks.instability(k, self.ext, r, err)
+        if why is not None:
+            return "diverged", why + self._active_clause(r)
+        if checks.deadlock(self.ext, r, err, blocked):
+            return "deadlock", self._deadlock_reason(tk, err, r, qdot)
+        if checks.stall(k, err, at_rest):
+            s = checks.s
+            return "deadlock", self._deadlock_reason(tk, err, r, qdot) + (
+                f"; the error fell by less than {s.stall_progress:.0%} in "
+                f"{s.stall_window:g} s with the reference at rest"
+            )
+        return None
+
+    def observe_limits(self, tk: float, q: np.ndarray) -> None:
+        """Record every limit crossed at this sample: joints, obstacle surfaces, link pairs."""
+        self.monitor.observe_joints(tk, q)
+        crun = self.crun
+        if crun is None:
+            return
+        if crun.cset.obstacles:
+            for o in np.flatnonzero(crun.dist_o < 0.0):
+                key = crun.cset.pair_names[int(crun.link_o[o])][o]
+                self.monitor.observe_penetration(tk, key, float(crun.dist_o[o]))
+        for key, dist in crun.self_penetrations:
+            self.monitor.observe_penetration(tk, key, dist)
+
+    def record(self, k: int, q: np.ndarray, qdot: np.ndarray, p_d: np.ndarray | None,
+               err: float, err_rot: float, r: int) -> None:  # fmt: skip
+        """Keep sample ``k``."""
+        placement = self.robot.data.oMf[self.task.frame_id]
+        j = self.rec.keep(k, q, qdot, placement.translation, p_d, err, err_rot)
+        if self.crun is not None:
+            assert self.rec.active is not None and self.rec.distance is not None
+            self.rec.active[j] = r - self.task.m
+            self.rec.distance[j] = self.crun.min_distance
+            self.crun.record(j)
+
+    # -- the loop ----------------------------------------------------------------------
+
+    def execute(self, q: np.ndarray) -> TrackingResult:
+        """Run every sample; returns the result."""
+        model, m, dt, N = self.robot.model, self.task.m, self.dt, self.N
+        crun, rec, t = self.crun, self.rec, self.t
+        qdot = np.zeros(self.robot.nv)
+        dq = np.zeros(self.robot.nv)
+        status, reason = "completed", f"reached the end of the trajectory at t = {t[-1]:.6g} s"
+        max_err = err = 0.0
+        steps, c0, c1 = 0, 0, 0
+        P_d = R_d = FF = at_rest = None
+        progress_every = max(1, N // 100)
+        rec.start(q)
+        start = time.perf_counter()
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for k in range(N):
+                if k == c1:
+                    c0, c1, P_d, R_d, FF, at_rest = self.chunks.load(k)
+                kk = k - c0
+                p_d = None if P_d is None else P_d[kk]
+                J6 = self.kinematics(q)
+                self.task_rows(J6, p_d, None if R_d is None else R_d[kk], FF[kk])
+                exact = rec.due(k)
+                r = m if crun is None else m + crun.update(k, q, self.ext, self.law, exact)
+                blocked = self.law(r, qdot)
+                err, err_rot = self.error_norms()
+                max_err = max(max_err, err)
+                stop = self.stop(k, qdot, err, r, blocked, bool(at_rest[kk]))
+                self.observe_limits(float(t[k]), q)
+                if exact or stop is not None:
+                    self.record(k, q, qdot, p_d, err, err_rot, r)
+                rec.every_sample(q, qdot)
+                steps = k + 1
+                if stop is not None:
+                    status, reason = stop
+                    break
+                if self.progress is not None and k % progress_every == 0:
+                    self.progress(k, N)
+                if k + 1 < N:
+                    np.multiply(qdot, dt, out=dq)
+                    q = pin.integrate(model, q, dq)
+        wall = time.perf_counter() - start
+        if self.progress is not None:
+            self.progress(N if status == "completed" else steps, N)
+        if status != "completed" and self.tr.out_of_reach:
+            reason += f"; {self.tr.out_of_reach}"
+        status, reason = self._final_status(status, reason)
+        return self._result(status, reason, wall, steps, max_err, err)
+
+    def _final_status(self, status: str, reason: str) -> tuple[str, str]:
+        """``completed`` becomes ``violated`` when a limit was crossed; skipped rows named."""
+        crun = self.crun
+        if crun is not None and status == "completed":
+            skipped = crun.skipped_names()
+            if skipped:
+                reason += (
+                    f"; {len(skipped)} violated constraint(s) found no free row (more than "
+                    f"the {crun.limit} allowed at once) and were skipped: {', '.join(skipped)}"
+                )
+        worst = self.monitor.worst()
+        if worst is None:
+            return status, reason
+        n = len(self.monitor.records)
+        crossed = f"{n} constraint limit(s) crossed, the worst: {worst.describe()}"
+        if status == "completed":
+            return "violated", f"{crossed} (the trajectory was run to its end)"
+        return status, f"{reason}; {crossed}"
+
+    def _result(
+        self, status: str, reason: str, wall: float, steps: int, max_err: float, err: float
+    ) -> TrackingResult:
+        tr, task = self.tr, self.task
+        arrays = self.rec.trimmed(self.dt)
+        info = {
+            "robot": self.robot.name,
+            "frame": task.frame,
+            "task": task.kind,
+            "axes": task.axes,
+            "law": tr.law,
+            "gain": [float(g) for g in tr.K_task],
+            "dt": self.dt,
+            "record_every": self.rec.every,
+            "duration": float(self.chunks.trajectory.duration),
+            "stability_margin_max": float(self.checks.worst_margin),
+        }
+        result = TrackingResult(
+            t=self.t[self.rec.idx[: self.rec.j]],
+            status=status,
+            reason=reason,
+            wall_time_s=wall,
+            steps=steps,
+            max_task_error=max_err,
+            final_task_error=err,
+            info=info,
+            robot=self.robot,
+            violations=self.monitor.as_list(),
+            **arrays,  # type: ignore[arg-type]
+        )
+        if self.crun is not None:
+            self.crun.finish(result, self.rec.j)
+        return result
+
+    # -- reasons -----------------------------------------------------------------------
+
+    def _active_clause(self, r: int) -> str:
+        if self.crun is None or r == self.task.m:
+            return ""
+        return f"; active constraints: {', '.join(self.crun.active_names())}"
+
+    def _deadlock_reason(self, tk: float, err: float, r: int, qdot: np.ndarray) -> str:
+        """Remark 2, with the task rows that cannot follow and the constraints that block them."""
+        ext, m = self.ext, self.task.m
+        b = ext.demand(m, np.zeros(m)) if self.tr.law == "pseudoinverse" else ext.K[:m] * ext.e[:m]
+        residual = b - ext.J[:m].dot(qdot)
+        size = float(np.abs(residual).max())
+        axes = self.task.axes
+        rows = [axes[i] for i in np.flatnonzero(np.abs(residual) >= 0.3 * size)] if size else axes
+        head = (
+            f"deadlock at t = {tk:.6g} s: the task error is {err:.4g} and the law cannot reduce "
+            f"it (Remark 2); task rows that cannot follow: {', '.join(rows)}"
+        )
+        if self.crun is None or r == m:
+            return head + "; no constraint is active: the task is singular or out of reach"
+        wanted = np.linalg.pinv(ext.J[:m]).dot(residual)  # the joint motion the task asks for
+        blocking = []
+        for s, c in enumerate(self.crun.active_rows()):
+            row = ext.J[m + s]
+            scale = float(np.linalg.norm(row) * np.linalg.norm(wanted))
+            if scale > 0.0 and float(row.dot(wanted)) < -0.05 * scale:
+                blocking.append(c.key)
+        names = blocking or self.crun.active_names()
+        return head + (
+            f"; in conflict with: {', '.join(names)}; active constraints: "
+            f"{', '.join(self.crun.active_names())}"
+        )
+
+
+def _joint_range(robot: object, cset: ConstraintSet | None) -> JointRange:
+    """The robot's limits, tightened by the joint-range constraint's where it has one."""
+    jl = None if cset is None else cset.joint_limits
+    if jl is None:
+        return JointRange(robot)  # type: ignore[arg-type]
+    return JointRange(robot, jl.lower, jl.upper, None, list(jl.joint_names))  # type: ignore[arg-type]
+
+
+LWA = pin.LOCAL_WORLD_ALIGNED
 
 
 def track(

@@ -203,7 +203,12 @@ def inside_obstacle(env: Env, law: str) -> clik.TrackingResult:
 
 
 def recovered_from_obstacle(result: clik.TrackingResult) -> None:
+    """A start in collision is a violation at t = 0, recovered: never crossed again."""
     assert result.min_obstacle_distance[0] < 0.0  # it did start inside
+    (violation,) = result.violations
+    assert violation["constraint"] == "obstacle:blob:link2" and violation["t_first"] == 0.0
+    assert violation["t_last"] < 0.2  # out within a fraction of a second
+    assert violation["worst"] == pytest.approx(-result.min_obstacle_distance[0])
     assert result.events[0] == {"t": 0.0, "constraint": "obstacle:blob:link2", "action": "activate"}
     assert result.min_obstacle_distance[-1] >= 0.03 - CLEARANCE_TOL
 
@@ -218,6 +223,10 @@ def beyond_override(env: Env) -> clik.TrackingResult:
 
 
 def driven_back(result: clik.TrackingResult) -> None:
+    """A start beyond a constraint's limit is a violation at t = 0, then driven back."""
+    (violation,) = result.violations
+    assert violation["constraint"] == "joint:joint3:upper" and violation["t_first"] == 0.0
+    assert violation["worst"] == pytest.approx(np.radians(20.0))
     assert result.events[0]["constraint"] == "joint:joint3:upper"
     assert result.events[0]["t"] == 0.0
     assert result.q[-1, 2] <= np.radians(-80.0) + 1e-6
@@ -754,17 +763,17 @@ START = [
     ),
     pytest.param(
         beyond_override,
-        Ends(["completed"], ["reached the end of the trajectory"], check=driven_back),
+        Ends(["violated"], ["joint:joint3:upper crossed by", "from t = 0 to"], check=driven_back),
         id="start-beyond-override-is-driven-back",
     ),
     pytest.param(
         lambda env: inside_obstacle(env, "pseudoinverse"),
-        Ends(["completed"], check=recovered_from_obstacle),
+        Ends(["violated"], ["obstacle:blob:link2 penetrated"], check=recovered_from_obstacle),
         id="start-inside-obstacle-law10",
     ),
     pytest.param(
         lambda env: inside_obstacle(env, "transpose"),
-        Ends(["completed"], check=recovered_from_obstacle),
+        Ends(["violated"], ["obstacle:blob:link2 penetrated"], check=recovered_from_obstacle),
         id="start-inside-obstacle-law9",
     ),
 ]

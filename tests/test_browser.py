@@ -6,12 +6,17 @@ to look at) and checks pixels where the robot and the obstacle must be, by
 projecting their world positions with the page's own camera.
 
 Needs ``/usr/bin/chromium`` (``apt-get install chromium``; ``.ci/run`` does it)
-and the ``playwright`` Python package; never ``playwright install``.
+and the ``playwright`` Python package; never ``playwright install``. Without
+them the tests are skipped, except on CI (``CI=true`` in the environment, as
+GitHub Actions, GitLab CI and ``.ci/run`` set it), where they fail: a CI run
+must not pass with its browser tests silently skipped.
 """
 
 from __future__ import annotations
 
+import importlib
 import io
+import os
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -39,19 +44,44 @@ CHROMIUM_ARGS = [
 ]
 VIEWPORT = {"width": 1024, "height": 768}
 
-pytestmark = [
-    pytest.mark.browser,
-    pytest.mark.skipif(
-        not Path(CHROMIUM).exists(),
-        reason=f"no {CHROMIUM}: apt-get install chromium (CI's .ci/run does)",
-    ),
-]
-playwright_api = pytest.importorskip(
-    "playwright.sync_api",
-    reason="pip install playwright (the 'test' extra); never "
-    "`playwright install`: the tests use Debian's chromium",
-)
-PIL_Image = pytest.importorskip("PIL.Image")
+pytestmark = pytest.mark.browser
+
+
+def on_ci() -> bool:
+    """Whether this is a CI run: ``CI`` set to ``true`` (or ``1``, ``yes``) in the environment."""
+    return os.environ.get("CI", "").strip().lower() in ("true", "1", "yes")
+
+
+def missing() -> str | None:
+    """What the browser tests lack (Chromium, Playwright, Pillow), or None."""
+    if not Path(CHROMIUM).exists():
+        return f"no {CHROMIUM}: apt-get install chromium (CI's .ci/run does)"
+    for module, how in (
+        (
+            "playwright.sync_api",
+            "pip install playwright (the 'test' extra); never "
+            "`playwright install`: the tests use Debian's chromium",
+        ),
+        ("PIL.Image", "pip install pillow (the 'test' extra)"),
+    ):
+        try:
+            importlib.import_module(module)
+        except ImportError:
+            return f"no {module}: {how}"
+    return None
+
+
+def require_browser() -> None:
+    """Skip when the browser tests cannot run; on CI fail instead."""
+    problem = missing()
+    if problem is None:
+        return
+    if on_ci():
+        pytest.fail(
+            f"CI={os.environ['CI']}: the browser tests must run, but {problem}", pytrace=False
+        )
+    pytest.skip(problem)
+
 
 PROJECT_JS = """(points) => {
     const THREE = MeshCat.THREE;
@@ -77,7 +107,9 @@ ROBOT_BUILT_JS = """() => {
 
 
 def rgb(png: bytes) -> np.ndarray:
-    return np.asarray(PIL_Image.open(io.BytesIO(png)).convert("RGB"), dtype=int)
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=int)
 
 
 def orange(img: np.ndarray) -> np.ndarray:
@@ -87,9 +119,14 @@ def orange(img: np.ndarray) -> np.ndarray:
 
 
 def purple(img: np.ndarray) -> np.ndarray:
-    """The obstacle body (0.45, 0.2, 0.65), lit."""
-    r, g, b = img[..., 0], img[..., 1], img[..., 2]
-    return (b > 90) & (b - g > 50) & (r - g > 25) & (g < 120)
+    """The obstacle: its body (0.45, 0.2, 0.65), lit, bare or seen through its threshold
+    shell (cyan (0, 0.75, 0.8) at 22 % opacity), or the shell alone over a light background
+    (a point obstacle has no body)."""
+    r, g, b = (img[..., i].astype(int) for i in range(3))
+    body = (b > 90) & (b - g > 50) & (r - g > 25) & (g < 120)
+    through_shell = (b > 120) & (b - g > 50) & (b - r > 40)
+    shell = (r > 120) & (g - r > 25) & (b - r > 25)
+    return body | through_shell | shell
 
 
 def magenta(img: np.ndarray) -> np.ndarray:
@@ -114,7 +151,10 @@ def count_in_box(mask: np.ndarray, points: np.ndarray, pad: float) -> int:
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[object]:
-    with playwright_api.sync_playwright() as p:
+    require_browser()
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
         b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
         yield b
         b.close()
@@ -182,6 +222,20 @@ def check_planar_arm(page: Page, result: TrackingResult, name: str) -> None:
 
 
 # -- tests -------------------------------------------------------------------------------
+
+
+def test_without_chromium_skip_or_on_ci_fail(monkeypatch):
+    monkeypatch.setitem(globals(), "CHROMIUM", "/nonexistent/chromium")
+    monkeypatch.delenv("CI", raising=False)
+    with pytest.raises(pytest.skip.Exception, match="no /nonexistent/chromium: apt-get install"):
+        require_browser()
+    monkeypatch.setenv("CI", "false")
+    with pytest.raises(pytest.skip.Exception):
+        require_browser()
+    for value in ("true", "1"):
+        monkeypatch.setenv("CI", value)
+        with pytest.raises(pytest.fail.Exception, match="the browser tests must run, but no "):
+            require_browser()
 
 
 @pytest.fixture(scope="module")

@@ -173,6 +173,26 @@ def test_demo_runs_the_case_study(tmp_path, capsys):
             assert (out / f"{fig}_{law}.png").stat().st_size > 10_000
 
 
+def test_demo_no_html_no_plots_writes_neither(tmp_path, capsys):
+    out = tmp_path / "demo"
+    assert main(["demo", "--out", str(out), "--no-html", "--no-plots"]) == 0
+    printed = capsys.readouterr().out
+    assert "HTML scenes" not in printed and "wrote figures" not in printed
+    summaries = sorted(p.parent.name for p in out.glob("*/summary.json"))
+    assert len(summaries) == 8 and "case_study_both_pinv" in summaries
+    assert list(out.rglob("*.html")) == []
+    assert list(out.rglob("*.png")) == []
+    assert (out / "table.txt").is_file()
+
+
+def test_demo_plots_and_no_plots_exclude_each_other(tmp_path, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["demo", "--out", str(tmp_path / "demo"), "--plots", "--no-plots"])
+    assert info.value.code == 2
+    assert "not allowed with argument" in capsys.readouterr().err
+    assert not (tmp_path / "demo").exists()
+
+
 def test_solve_html_and_plots(tmp_path):
     out = tmp_path / "o"
     scenario = str(scenario_path("case_study_both"))

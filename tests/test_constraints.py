@@ -247,18 +247,24 @@ def test_panda_sphere_avoided(panda, panda_line):
 def test_panda_self_collision(panda):
     task = clik.Task(panda, "panda_hand", "position")
     p0 = task.placement(panda.q_reference).translation
-    fold = Line(p0, [0.1, 0.0, 0.38], duration=3.0)  # folds the fingers into links 1-2
+    fold = Line(p0, [0.12, 0.0, 0.40], duration=3.0)  # folds the fingers into links 1-2
     monitor = ConstraintSet(
         panda, self_collision=True, obstacle_rows=False, max_active=0, self_threshold=0.01
     )
     assert monitor.scene is not None and len(monitor.scene.self_pairs) > 5
     free = clik.Tracker(task, law="pseudoinverse", constraints=monitor).run(fold)
-    rows = ConstraintSet(panda, self_collision=True, self_threshold=0.01)
+    # The joint ranges too: without them the guarded fold passes joint 4's URDF limit.
+    limits = JointLimits(panda, np.radians(2.0))
+    rows = ConstraintSet(panda, self_collision=True, self_threshold=0.01, joint_limits=limits)
     guarded = clik.Tracker(task, law="pseudoinverse", constraints=rows).run(fold)
     free_min = self_min_distance(panda, rows.scene, free.q)
     guarded_min = self_min_distance(panda, rows.scene, guarded.q)
     assert free_min < 0.0  # unconstrained, the fingers go into the arm
+    assert free.status == "violated"
+    assert {v["constraint"].split(":")[0] for v in free.violations} == {"self"}
     assert guarded.status == "completed" and guarded.max_task_error < 1e-4
+    assert guarded.violations == []
+    assert np.all(guarded.q >= panda.lower - 1e-9) and np.all(guarded.q <= panda.upper + 1e-9)
     assert guarded_min >= 0.01 - 0.002
     assert any(e["constraint"].startswith("self:") for e in guarded.events)
 

@@ -8,7 +8,7 @@ import pytest
 
 from clik.errors import FrameNotFound, InputError, JointNotFound, RobotLoadError, UnknownRobotError
 from clik.planar_arm import planar_arm_urdf, planar_forward_kinematics, write_planar_arm
-from clik.robot import Robot
+from clik.robot import MimicJointWarning, Robot
 
 POSITION_TOL = 1e-12  # [m], exact kinematics up to rounding
 CASE_STUDY_Q0 = np.deg2rad([180.0, -30.0, -90.0, -30.0])
@@ -130,15 +130,16 @@ def test_closed_form_shapes():
 # ------------------------------------------------------ example-robot-data robots
 
 
-def test_panda_keeps_nine_dof_and_its_ready_pose():
+def test_panda_keeps_its_leader_finger_and_its_ready_pose():
     import example_robot_data
 
-    panda9 = Robot.load("panda")
-    assert (panda9.nq, panda9.nv) == (9, 9)
-    assert panda9.joint_names[-2:] == ["panda_finger_joint1", "panda_finger_joint2"]
-    neutral = pin.neutral(panda9.model)
-    assert neutral[3] > panda9.upper[3]  # the reason for a reference pose
-    np.testing.assert_array_equal(panda9.q_reference, example_robot_data.load("panda").q0)
+    with pytest.warns(MimicJointWarning, match="panda_finger_joint2"):
+        panda8 = Robot.load("panda")  # finger 2 mimics finger 1: locked, see test_joint_kinds
+    assert (panda8.nq, panda8.nv) == (8, 8)
+    assert panda8.joint_names[-1] == "panda_finger_joint1"
+    neutral = pin.neutral(panda8.model)
+    assert neutral[3] > panda8.upper[3]  # the reason for a reference pose
+    np.testing.assert_array_equal(panda8.q_reference, example_robot_data.load("panda").q0[:8])
 
 
 def test_locked_panda_has_seven_dof_and_the_ready_pose(panda):

@@ -30,7 +30,7 @@ TIGHT = 1e-12  # [m] or [rad]: exact formulas
 FD_RTOL = 1e-4  # analytic velocity vs central finite differences
 FD_STEP = 1e-6  # [s]
 
-P0 = np.array([0.5598, -0.15, 0.0])  # case study start (METHOD.md) [m]
+P0 = np.array([0.5598, -0.15, 0.0])  # case study start (docs/method.md) [m]
 P1 = np.array([0.8, -0.2, 0.0])  # case study goal [m]
 
 

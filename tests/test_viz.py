@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import base64
 import copy
+import itertools
 import json
 import re
 import subprocess
@@ -30,7 +31,7 @@ from clik.errors import InputError
 from clik.result import TrackingResult
 from clik.robot import PANDA_FINGERS
 from clik.runner import build
-from clik.trajectory import Circle, Hold, PoseTrajectory
+from clik.trajectory import Circle
 from clik.viz import build_scene, export_html, live, show, show_path, stop_server
 from clik.viz.server import LOOPBACK, MeshcatServer
 from clik.viz.timeline import Timeline
@@ -40,15 +41,20 @@ MAX_HTML_BYTES = 5_000_000
 
 
 def panda_run() -> TrackingResult:
-    """A 3 s Panda pose task along a circle, with an obstacle that activates a row."""
+    """A 3 s Panda position task along a circle, with an obstacle that activates rows.
+
+    (A pose task cannot keep the fingers, rigid on the hand, off the ball: that run ends
+    in a deadlock, the task and the constraint in conflict.)
+    """
     robot = clik.Robot.load("panda", lock=PANDA_FINGERS)
-    task = clik.Task(robot, "panda_hand", "pose")
+    task = clik.Task(robot, "panda_hand", "position")
     q0 = robot.q_reference
     start = task.placement(q0)
     p0 = start.translation
-    circle = Circle.through(p0, p0 + [0.0, 0.12, 0.0], [1.0, 0.0, 0.0], 2 * np.pi, duration=3.0)
-    trajectory = PoseTrajectory(circle, Hold(rotation=start.rotation, duration=3.0))
-    ball = Obstacle("ball", "sphere", p0 + [0.1, 0.1, -0.25], radius=0.05, threshold=0.05)
+    trajectory = Circle.through(
+        p0, p0 + [0.0, 0.12, 0.0], [1.0, 0.0, 0.0], 2 * np.pi, duration=3.0
+    )
+    ball = Obstacle("ball", "sphere", p0 + [0.1, 0.06, -0.2], radius=0.05, threshold=0.05)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         constraints = ConstraintSet(robot, obstacles=[ball], obstacle_threshold=0.05)
@@ -193,6 +199,69 @@ class TestScene:
         view = build_scene(panda_result, geometry="collision").view
         assert not view.planar
         assert np.all(np.abs(view.offset) > 0.1)
+
+
+def cielab(rgb) -> np.ndarray:
+    """CIELAB (D65) of an sRGB colour in [0, 1]."""
+    c = np.asarray(rgb, dtype=float)
+    c = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    xyz = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]])
+    xyz = (xyz @ c) / [0.95047, 1.0, 1.08883]
+    f = np.where(xyz > (6 / 29) ** 3, np.cbrt(xyz), xyz / (3 * (6 / 29) ** 2) + 4 / 29)
+    return np.array([116 * f[1] - 16, 500 * (f[0] - f[1]), 200 * (f[1] - f[2])])
+
+
+MIN_DELTA_E = 25.0
+"""Smallest CIELAB distance between two legend colours (about 2.3 is just noticeable)."""
+
+
+class TestLegend:
+    def test_legend_colours_are_pairwise_distinct(self):
+        from clik.viz import palette
+
+        colours = [tuple(c) for c, _ in palette.LEGEND]
+        assert len(set(colours)) == len(colours)
+        labels = [label for _, label in palette.LEGEND]
+        assert len(set(labels)) == len(labels)
+        for (a, la), (b, lb) in itertools.combinations(palette.LEGEND, 2):
+            gap = float(np.linalg.norm(cielab(a) - cielab(b)))
+            assert gap >= MIN_DELTA_E, f"{la!r} and {lb!r} look alike (Delta E {gap:.1f})"
+        for colour, label in palette.LEGEND:
+            for background in (palette.BACKGROUND_TOP, palette.BACKGROUND_BOTTOM):
+                gap = float(np.linalg.norm(cielab(colour) - cielab(background)))
+                assert gap >= MIN_DELTA_E, f"{label!r} fades into the background"
+
+    def test_every_scene_colour_has_its_own_legend_entry(self):
+        from clik.viz import palette
+
+        drawn = {
+            palette.REFERENCE,
+            palette.TRAIL,
+            palette.OBSTACLE,
+            palette.OBSTACLE_SHELL,
+            palette.ROW_ACTIVE,
+            palette.MONITOR_NEAR,
+            palette.MONITOR_CLEAR,
+            palette.JOINT_LIMIT_ACTIVE,
+            palette.JOINT_LIMIT_NEAR,
+        }
+        assert drawn == {tuple(c) for c, _ in palette.LEGEND}
+
+    def test_shell_and_body_differ_in_the_page_and_its_caption(self, case_study, tmp_path):
+        from clik.viz import palette
+        from clik.viz.commands import color_int
+
+        path = export_html(case_study, tmp_path / "scene.html")
+        materials = {
+            c["path"]: c["object"]["materials"][0]["color"]
+            for c in html_commands(path)
+            if c["type"] == "set_object" and c["path"].startswith("/meshcat/obstacles/pin/")
+        }
+        assert materials["/meshcat/obstacles/pin/body"] == color_int(palette.OBSTACLE)
+        assert materials["/meshcat/obstacles/pin/shell"] == color_int(palette.OBSTACLE_SHELL)
+        text = path.read_text(encoding="utf-8")
+        swatches = re.findall(r'<span style="background:#([0-9a-f]{6})"></span>', text)
+        assert swatches == [f"{color_int(c):06x}" for c, _ in palette.LEGEND]
 
 
 def listening(pid: int) -> list[tuple[str, int]]:

@@ -1,4 +1,4 @@
-"""Constraints as extra task rows (METHOD.md, "Constraints enlarge the task").
+"""Constraints as extra task rows (docs/method.md, "Constraints enlarge the task").
 
 Each constraint contributes, while active, one row to the extended task of
 eqs. (20)-(25): an error ``e_c`` (positive when its threshold is violated), a
@@ -14,7 +14,11 @@ Jacobian row ``j_c`` and a feed-forward term ``f_c`` such that
 - :class:`ConstraintSet`: activation, release, the ``n - m`` bound (22), events.
 """
 
-from clik.constraints.collision_scene import CollisionScene, NoCollisionGeometryWarning
+from clik.constraints.collision_scene import (
+    CollisionScene,
+    NoCollisionGeometryWarning,
+    SkippedGeometryWarning,
+)
 from clik.constraints.constraint_set import RELEASE_RULES, ConstraintSet
 from clik.constraints.joint_limits import JointLimits
 from clik.constraints.obstacle import SHAPES, Obstacle
@@ -29,6 +33,7 @@ __all__ = [
     "JointLimits",
     "NoCollisionGeometryWarning",
     "Obstacle",
+    "SkippedGeometryWarning",
     "obstacle_row",
     "point_jacobian",
 ]

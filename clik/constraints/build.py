@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from clik.constraints.constraint_set import ConstraintSet
-from clik.constraints.joint_limits import JointLimits
+from clik.constraints.joint_limits import JointLimits, convert_override
 from clik.constraints.obstacle import Obstacle
 from clik.errors import ClikError, GeometryError, InputError, JointNotFound, ScenarioError
 
@@ -16,7 +16,13 @@ if TYPE_CHECKING:
 
 
 def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> ConstraintSet:
-    """The scenario's obstacles (always monitored) and enabled constraint rows."""
+    """The scenario's obstacles (always monitored) and enabled constraint rows.
+
+    Joint-range rows (:class:`JointLimits`): ``threshold`` [rad] is the revolute
+    joints' ``d_q`` and ``prismatic_threshold`` [m] the prismatic joints' (each
+    capped at a quarter of the joint's range); an override is read in the
+    table's ``unit`` for a revolute joint and in metres for a prismatic one.
+    """
     obstacles = []
     for i, spec in enumerate(scenario.obstacles):
         kwargs = {k: spec[k] for k in ("radius", "size", "length", "file", "scale") if k in spec}
@@ -39,7 +45,17 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
     joint_limits = None
     if jl_spec["enabled"] or jl_spec["override"]:  # a bad override is an error even when off
         try:
-            joint_limits = JointLimits(robot, jl_spec["threshold"], jl_spec["override"])
+            override = jl_spec["override"]
+            if "override_as_written" in jl_spec:  # parse_scenario's; older dicts: radians
+                override = convert_override(
+                    robot, jl_spec["override_as_written"], jl_spec.get("unit", "rad")
+                )
+            joint_limits = JointLimits(
+                robot,
+                jl_spec["threshold"],
+                override,
+                prismatic_threshold=jl_spec.get("prismatic_threshold"),
+            )
         except JointNotFound as exc:
             raise ScenarioError(
                 scenario.file, "constraints.joint_limits.override", str(exc)

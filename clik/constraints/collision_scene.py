@@ -36,6 +36,10 @@ class NoCollisionGeometryWarning(UserWarning):
     """Some links have no collision geometry: they cannot be kept away from obstacles."""
 
 
+class SkippedGeometryWarning(UserWarning):
+    """A link geometry has no usable convex hull: it is left out, the others are checked."""
+
+
 class CollisionScene:
     """Link geometry and obstacles with their collision pairs.
 
@@ -79,13 +83,23 @@ class CollisionScene:
                     bad,
                 )
         self.link_names: list[str] = []
+        self.skipped_geometries: list[str] = []
         link_joint = []
         local_radius = []
         for go in source.geometryObjects:
             link = frame_names[go.parentFrame]
             if links is not None and link not in links:
                 continue
-            geometry, radius = _convex(go, f"collision geometry {go.name!r}")
+            try:
+                geometry, radius = _convex(go, f"collision geometry {go.name!r}")
+            except GeometryError as exc:  # one bad mesh must not disable the others
+                self.skipped_geometries.append(go.name)
+                warnings.warn(
+                    f"{exc}; this geometry is not checked against obstacles",
+                    SkippedGeometryWarning,
+                    stacklevel=3,
+                )
+                continue
             obj = pin.GeometryObject(
                 go.name, go.parentJoint, go.parentFrame, go.placement, geometry
             )
@@ -112,6 +126,13 @@ class CollisionScene:
                 stacklevel=3,
             )
         self.n_links = len(self.link_names)
+        if self.n_links == 0 and obstacles:
+            raise GeometryError(
+                f"robot {getattr(robot, 'name', '?')}: no link has collision geometry "
+                f"{'among ' + str(list(links)) + ' ' if links is not None else ''}"
+                "to keep away from the obstacles; remove the obstacles or use a URDF "
+                "with <collision> elements"
+            )
         self.local_radius = np.asarray(local_radius)
         self.link_joint = np.asarray(link_joint, dtype=np.intp)
         # One bounding sphere per joint, about the joint origin, enclosing its geometries.

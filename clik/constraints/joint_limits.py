@@ -1,4 +1,4 @@
-"""Joint-range constraints, eqs. (16)-(19) of METHOD.md.
+"""Joint-range constraints, eqs. (16)-(19) of docs/method.md.
 
 For ``q_imin <= q_i <= q_imax`` and a threshold ``d_q``, the distance to the
 nearer limit is ``d = q_i - q_imin`` (lower) or ``d = q_imax - q_i`` (upper).
@@ -6,94 +6,283 @@ The error is ``e_q = d_q - d`` (17), positive inside the threshold band; the
 row is ``u_q = +-(0 ... 1 ... 0)`` (19), ``+`` for the lower limit and ``-``
 for the upper one, so that ``edot_q = -u_q qdot`` (feed-forward 0 for a
 constant threshold).
+
+Only one-DOF joints with a finite range have rows: revolute joints (values in
+[rad]) and prismatic joints ([m]). A continuous joint (no limits, stored as
+(cos, sin)) and any other joint get none, while the other joints keep theirs;
+each limited joint is mapped to its configuration index (to evaluate ``q_i``)
+and its velocity index (the nonzero entry of its rows).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
 from clik.errors import InputError, JointNotFound
+from clik.robot import CONTINUOUS, PRISMATIC, REVOLUTE, joint_kind
+
+DEFAULT_THRESHOLD = math.pi / 90.0
+"""Default ``d_q`` of revolute joints: 2 deg [rad]."""
+DEFAULT_PRISMATIC_THRESHOLD = 0.005
+"""Default ``d_q`` of prismatic joints in a scenario (``prismatic_threshold``) [m]."""
+RANGE_FRACTION = 0.25
+"""Largest threshold, as a fraction of the joint's range: a row cannot fire over the whole range."""
+
+
+def convert_override(
+    robot: object, override: Mapping[str, Mapping[str, float]], unit: str
+) -> dict[str, dict[str, float]]:
+    """Limits written in a scenario's ``unit`` converted to [rad] for revolute joints.
+
+    Prismatic joints' limits are metres whatever the unit and stay as written;
+    unknown joints are kept (:class:`JointLimits` reports them).
+
+    Args:
+        robot: The robot (its joint kinds).
+        override: Joint name -> ``{"lower": value, "upper": value}`` as written.
+        unit: ``"rad"`` or ``"deg"``.
+
+    Returns:
+        The same mapping with revolute joints' values in [rad].
+    """
+    kinds = robot.joint_kinds  # type: ignore[attr-defined]
+    scale = math.pi / 180.0 if unit == "deg" else 1.0
+    return {
+        joint: {
+            side: float(value) * (scale if kinds.get(joint) in (REVOLUTE, CONTINUOUS) else 1.0)
+            for side, value in limits.items()
+        }
+        for joint, limits in override.items()
+    }
 
 
 class JointLimits:
-    """The joint-range rows of one robot, evaluated for all joints at once.
+    """The joint-range rows of one robot, evaluated for all limited joints at once.
+
+    Rows exist for the one-DOF joints (revolute, prismatic) whose limits, after
+    ``override``, are finite with ``lower < upper``: a continuous joint, a joint
+    with an infinite limit or a zero range gets none.
+
+    Each joint's threshold is capped at a quarter of its range
+    (:data:`RANGE_FRACTION`), so that its two threshold bands never cover the
+    whole range (a row that fires everywhere, e.g. a 2 deg threshold read as
+    0.035 m on the Panda's 0.04 m finger, would hold the joint still).
 
     Args:
         robot: The robot (its URDF limits are the defaults).
-        threshold: ``d_q`` [rad or m], scalar or per joint.
-        override: Joint name -> ``{"lower": value, "upper": value}`` replacing URDF limits
-            (e.g. the case study's ``q3 <= -80 deg``) [rad].
+        threshold: ``d_q``, a scalar or one value per configuration entry (nq,):
+            [rad] for revolute joints, and [m] for prismatic joints unless
+            ``prismatic_threshold`` is given.
+        override: Joint name -> ``{"lower": value, "upper": value}`` replacing URDF
+            limits (e.g. the case study's ``q3 <= -80 deg``) [rad or m]; only
+            revolute and prismatic joints.
+        prismatic_threshold: ``d_q`` of the prismatic joints [m]; default: ``threshold``.
 
     Attributes:
-        lower, upper: Limits used (nq,), ``-inf``/``inf`` where a joint has none.
-        threshold: ``d_q`` per joint (nq,).
-        names: Constraint name of each of the ``2 nq`` candidate rows
-            (``joint:<name>:lower``, then ``joint:<name>:upper``).
+        joint_names: The limited joints (rows exist for these only).
+        q_index: Configuration index of each limited joint (for evaluation).
+        v_index: Velocity index of each limited joint (the row's nonzero entry).
+        kinds: ``"revolute"`` or ``"prismatic"`` per limited joint.
+        units: ``"rad"`` or ``"m"`` per limited joint.
+        lower, upper: Limits used per limited joint [rad or m].
+        threshold: ``d_q`` used per limited joint (after the cap) [rad or m].
+        names: Constraint name of each of the ``2 n`` candidate rows
+            (``joint:<name>:lower`` for every limited joint, then ``joint:<name>:upper``).
+        row_threshold: ``d_q`` of each entry of ``names`` [rad or m] (also ``_thr``).
+        n: Number of limited joints.
     """
 
     def __init__(
         self,
         robot: object,
-        threshold: float | np.ndarray = math.pi / 90.0,
+        threshold: float | np.ndarray = DEFAULT_THRESHOLD,
         override: Mapping[str, Mapping[str, float]] | None = None,
+        prismatic_threshold: float | None = None,
     ) -> None:
-        names = list(robot.joint_names)  # type: ignore[attr-defined]
-        if robot.nq != robot.nv:  # type: ignore[attr-defined]
-            raise InputError(
-                "constraints.joint_limits",
-                "a robot with nq == nv (no continuous or spherical joints) for joint-range rows",
-            )
-        lower = np.array(robot.lower, dtype=float)  # type: ignore[attr-defined]
-        upper = np.array(robot.upper, dtype=float)  # type: ignore[attr-defined]
-        for joint, lim in (override or {}).items():
-            if joint not in names:
-                raise JointNotFound(joint, names)
-            i = names.index(joint)
+        model = robot.model  # type: ignore[attr-defined]
+        all_names = list(robot.joint_names)  # type: ignore[attr-defined]
+        joints = list(model.joints[1:])
+        nq = model.nq
+        lower = np.array(model.lowerPositionLimit, dtype=float)
+        upper = np.array(model.upperPositionLimit, dtype=float)
+        for joint_name, lim in (override or {}).items():
+            if joint_name not in all_names:
+                raise JointNotFound(joint_name, all_names)
+            joint = joints[all_names.index(joint_name)]
+            kind = joint_kind(joint)
+            if kind not in (REVOLUTE, PRISMATIC):
+                raise InputError(
+                    f"constraints.joint_limits.override.{joint_name}",
+                    "a revolute or prismatic joint (a continuous joint has no range)",
+                    kind,
+                )
             for side, value in lim.items():
                 if side not in ("lower", "upper") or not np.isfinite(value):
                     raise InputError(
-                        f"constraints.joint_limits.override.{joint}.{side}",
+                        f"constraints.joint_limits.override.{joint_name}.{side}",
                         "'lower' or 'upper' with a finite value",
                         value,
                     )
-                (lower if side == "lower" else upper)[i] = value
-        if np.any(lower > upper):
-            bad = [names[i] for i in np.flatnonzero(lower > upper)]
+                (lower if side == "lower" else upper)[joint.idx_q] = value
+        one_dof = [
+            (name, joint)
+            for name, joint in zip(all_names, joints, strict=True)
+            if joint_kind(joint) in (REVOLUTE, PRISMATIC)
+        ]
+        bad = [name for name, joint in one_dof if lower[joint.idx_q] > upper[joint.idx_q]]
+        if bad:
             raise InputError("constraints.joint_limits", "lower <= upper for every joint", bad)
-        thr = np.broadcast_to(np.asarray(threshold, dtype=float), lower.shape).copy()
-        if not np.all(np.isfinite(thr)) or np.any(thr <= 0):
-            raise InputError("constraints.joint_limits.threshold", "positive values", threshold)
-        self.lower, self.upper, self.threshold = lower, upper, thr
-        self.joint_names = names
-        self.names = [f"joint:{n}:lower" for n in names] + [f"joint:{n}:upper" for n in names]
-        self.n = len(names)
-        self._bound = np.concatenate([lower, -upper])
-        self._thr = np.concatenate([thr, thr])
-        self.sign = np.concatenate([np.ones(self.n), -np.ones(self.n)])
-        self.errors = np.zeros(2 * self.n)
-        self._tmp = np.zeros(2 * self.n)
+        thr_q = _thresholds(threshold, nq)
+        if prismatic_threshold is not None:
+            p_thr = float(prismatic_threshold)
+            if not (math.isfinite(p_thr) and p_thr > 0):
+                raise InputError(
+                    "constraints.joint_limits.prismatic_threshold",
+                    "a positive length [m]",
+                    prismatic_threshold,
+                )
+        limited = [
+            (name, joint)
+            for name, joint in one_dof
+            if np.isfinite(lower[joint.idx_q])
+            and np.isfinite(upper[joint.idx_q])
+            and lower[joint.idx_q] < upper[joint.idx_q]
+        ]
+        self.joint_names = [name for name, _ in limited]
+        self.n = n = len(limited)
+        self.q_index = np.array([j.idx_q for _, j in limited], dtype=int)
+        self.v_index = np.array([j.idx_v for _, j in limited], dtype=int)
+        self.kinds = [joint_kind(j) for _, j in limited]
+        self.units = ["m" if k == PRISMATIC else "rad" for k in self.kinds]
+        self.lower = lower[self.q_index]
+        self.upper = upper[self.q_index]
+        thr = thr_q[self.q_index]
+        if prismatic_threshold is not None:
+            thr[[k == PRISMATIC for k in self.kinds]] = p_thr
+        self.threshold = np.minimum(thr, RANGE_FRACTION * (self.upper - self.lower))
+        self.names = [f"joint:{name}:lower" for name in self.joint_names] + [
+            f"joint:{name}:upper" for name in self.joint_names
+        ]
+        self._bound = np.concatenate([self.lower, -self.upper])
+        self.row_threshold = np.concatenate([self.threshold, self.threshold])
+        self._thr = self.row_threshold
+        self.sign = np.concatenate([np.ones(n), -np.ones(n)])
+        self.errors = np.zeros(2 * n)
+        self._qi = np.zeros(n)
+
+    def _take(self, q: np.ndarray) -> np.ndarray:
+        """The limited joints' values [rad or m]."""
+        return np.take(q, self.q_index, out=self._qi)
 
     def evaluate(self, q: np.ndarray) -> np.ndarray:
-        """Errors ``e_q = d_q - d`` (17) of all ``2 nq`` rows (lower rows, then upper rows)."""
+        """Errors ``e_q = d_q - d`` (17) of all ``2 n`` rows (lower rows, then upper rows).
+
+        Args:
+            q: A configuration (nq,).
+
+        Returns:
+            One error per entry of :attr:`names` [rad or m], positive inside the
+            threshold band (a buffer reused by the next call).
+        """
         e, n = self.errors, self.n
+        qi = self._take(q)
         # d = q - lower  (lower rows),  d = upper - q  (upper rows)
-        np.subtract(q, self._bound[:n], out=e[:n])
-        np.add(q, self._bound[n:], out=e[n:])
+        np.subtract(qi, self._bound[:n], out=e[:n])
+        np.add(qi, self._bound[n:], out=e[n:])
         e[n:] *= -1.0
         np.subtract(self._thr, e, out=e)
         return e
 
+    def excursion(self, q: np.ndarray) -> np.ndarray:
+        """How far past its limit each row's joint is, per entry of :attr:`names`.
+
+        Args:
+            q: A configuration (nq,).
+
+        Returns:
+            A new array (2 n,) [rad or m]: ``lower - q_i`` (lower rows), ``q_i -
+            upper`` (upper rows); positive past the limit, <= 0 inside.
+        """
+        qi = np.take(q, self.q_index)
+        return np.concatenate([self.lower - qi, qi - self.upper])
+
     def slack(self, q: np.ndarray) -> float:
         """How far [rad or m] the nearest joint is from entering its threshold band.
 
-        Negative or zero when some row's error is >= 0 (``-max e_q`` of eq. (17)).
+        Negative or zero when some row's error is >= 0 (``-max e_q`` of eq. (17));
+        ``inf`` when the robot has no limited joint.
         """
+        if self.n == 0:
+            return math.inf
         return -float(self.evaluate(q).max())
 
     def row(self, i: int, out: np.ndarray) -> None:
-        """Row ``u_q`` (19) of candidate ``i`` into ``out`` (nv,)."""
+        """Row ``u_q`` (19) of candidate ``i`` into ``out`` (nv,): ``+1`` (lower) or
+        ``-1`` (upper) at the joint's velocity index, zeros elsewhere."""
         out[:] = 0.0
-        out[i % self.n] = self.sign[i]
+        out[self.v_index[i % self.n]] = self.sign[i]
+
+
+def _thresholds(threshold: float | np.ndarray, nq: int) -> np.ndarray:
+    """``threshold`` as one positive value per configuration entry (nq,) [rad or m]."""
+    try:
+        thr = np.broadcast_to(np.asarray(threshold, dtype=float), (nq,)).copy()
+    except (TypeError, ValueError):
+        thr = np.full(nq, math.nan)
+    if not np.all(np.isfinite(thr)) or np.any(thr <= 0):
+        raise InputError(
+            "constraints.joint_limits.threshold",
+            f"positive values [rad or m] (one, or {nq} for the configuration)",
+            threshold,
+        )
+    return thr
+
+
+def limits_by_q(
+    used: Mapping[str, Any], robot: object | None, nq: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """A run's ``joint_limits_used`` (per limited joint) spread over the configuration.
+
+    The limited joints are placed at their configuration index, from, in order:
+    ``used["q_index"]``; ``used["joint_names"]`` with the robot; one entry per
+    configuration value (every joint limited, or a record from before continuous
+    joints were left out); the robot's limited joints (:class:`JointLimits` with
+    its URDF limits).
+
+    Args:
+        used: ``{"lower": ..., "upper": ..., "threshold": ...}`` [rad or m], as in
+            ``result.info["summary_extra"]["joint_limits_used"]``.
+        robot: The run's robot, or None.
+        nq: Size of the run's configuration.
+
+    Returns:
+        ``(lower, upper, threshold)``, each (nq,), NaN where a value has no row; None
+        when the joints cannot be placed.
+    """
+    values = [np.asarray(used[k], dtype=float).ravel() for k in ("lower", "upper", "threshold")]
+    n = len(values[0])
+    index: list[int] | None = None
+    if used.get("q_index") is not None:
+        index = [int(i) for i in used["q_index"]]
+    elif used.get("joint_names") is not None and robot is not None:
+        names = robot.q_joint_names  # type: ignore[attr-defined]
+        if all(name in names for name in used["joint_names"]):
+            index = [names.index(name) for name in used["joint_names"]]
+    elif n == nq:
+        index = list(range(nq))
+    elif robot is not None and robot.nq == nq:  # type: ignore[attr-defined]
+        index = JointLimits(robot).q_index.tolist()
+    if index is None or len(index) != n or any(not 0 <= i < nq for i in index):
+        return None
+    if any(len(v) != n for v in values):
+        return None
+    out = []
+    for v in values:
+        full = np.full(nq, np.nan)
+        full[index] = v
+        out.append(full)
+    return out[0], out[1], out[2]

@@ -1,6 +1,6 @@
 """Obstacles: convex volumes as coal geometries, with a pose and a constant velocity.
 
-METHOD.md, "Obstacle avoidance (13)-(15)": obstacles are convex volumes; a
+docs/method.md, "Obstacle avoidance (13)-(15)": obstacles are convex volumes; a
 point is a sphere of radius 0 (the paper's case study). A mesh obstacle is
 replaced by its convex hull, computed once.
 """

@@ -1,4 +1,4 @@
-r"""Obstacle rows, eqs. (13)-(15) of METHOD.md, from coal's witness points.
+r"""Obstacle rows, eqs. (13)-(15) of docs/method.md, from coal's witness points.
 
 With ``p_o`` the witness point on the link, ``c`` the one on the obstacle,
 ``d = p_o - c`` and threshold ``d_o``:
@@ -7,7 +7,7 @@ With ``p_o`` the witness point on the link, ``c`` the one on the obstacle,
   ``j_o^T = d^T J_po`` (15), feed-forward ``d_o ddot_o + d^T cdot`` (14).
 - ``"normalized"``: ``e_o = d_o - |d|``, row ``n^T J_po``, feed-forward
   ``n^T cdot``, with ``n = d / |d|``: the same direction, a row whose size
-  does not shrink with ``|d|`` (METHOD.md, "Implementation notes").
+  does not shrink with ``|d|`` (docs/method.md, "Implementation notes").
 
 ``J_po`` is the Jacobian of ``p_o`` fixed on its link at that instant
 (``LOCAL_WORLD_ALIGNED``). When the link touches or penetrates the obstacle

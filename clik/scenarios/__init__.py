@@ -1,1 +1,1 @@
-"""Scenario files shipped with clik: the paper's case study (METHOD.md), for laws (9) and (10)."""
+"""Scenario files shipped with clik: the case study of docs/method.md, laws (9) and (10)."""

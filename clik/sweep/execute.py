@@ -7,6 +7,9 @@ sweep goes on. Exactly-once writing is the client's job: it writes a run id
 only if it is not in the folder yet, whatever Dask does underneath.
 
 - A run that raises comes back as a row with ``status = "error"``.
+- The sweep *fails* (:attr:`SweepReport.failed`, exit code 1 of ``clik
+  sweep``) when a run in the folder raised, or ended with a status of
+  :data:`FAILED_STATUSES`; resumed runs count as much as those computed now.
 - A worker that dies: Dask reschedules its tasks (and recomputes results it
   held but the client had not fetched) on the other workers. A task whose
   workers died ``distributed.scheduler.allowed-failures`` times (default 3)
@@ -34,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 from clik.errors import ClikError, InputError, ScenarioError
 from clik.sweep.progress import RunProgress
 from clik.sweep.spec import RunSpec, Sweep, load_sweep
-from clik.sweep.store import CSV, PARQUET, ResultStore, check_folder
+from clik.sweep.store import CSV, PARQUET, ResultStore, check_folder, read_statuses
 from clik.sweep.worker import run_one
 
 if TYPE_CHECKING:
@@ -45,6 +48,26 @@ FLUSH_SECONDS = 2.0
 
 FLUSH_ROWS = 256
 """Most rows kept in memory before they are written."""
+
+RAISED = "error"
+"""The ``status`` of a run that raised (or whose task failed, e.g. ``KilledWorker``)."""
+
+FAILED_STATUSES = frozenset({"violated", "diverged"})
+"""Run statuses that fail a sweep, as do runs that raised (:data:`RAISED`)."""
+
+STATUS_ORDER = ("completed", "deadlock", "diverged", "violated")
+"""The order of the statuses in :func:`status_line` (others follow, sorted)."""
+
+
+def status_line(counts: Counter[str]) -> str:
+    """Counts per status, e.g. ``completed 118, deadlock 1, violated 1, raised 0``.
+
+    Statuses with runs are listed in :data:`STATUS_ORDER`, then any other
+    status (sorted); runs that raised come last as ``raised``, always shown.
+    """
+    shown = [s for s in STATUS_ORDER if counts.get(s)]
+    shown += sorted(s for s, n in counts.items() if n and s != RAISED and s not in STATUS_ORDER)
+    return ", ".join([*(f"{s} {counts[s]}" for s in shown), f"raised {counts.get(RAISED, 0)}"])
 
 
 @dataclass
@@ -59,6 +82,8 @@ class SweepReport:
         computed: Runs computed and written now.
         lost: Runs neither written nor failed (cancelled by the cluster); a rerun computes them.
         statuses: Status counts of the runs written now.
+        all_statuses: Status counts of every run in the folder at the end (those
+            written now and those resumed), read back from the results table.
         wall_time_s: From the first submission to the last write [s].
         interrupted: The sweep was stopped before its end (Ctrl-C).
     """
@@ -70,6 +95,7 @@ class SweepReport:
     computed: int = 0
     lost: int = 0
     statuses: Counter[str] = field(default_factory=Counter)
+    all_statuses: Counter[str] = field(default_factory=Counter)
     wall_time_s: float = 0.0
     interrupted: bool = False
 
@@ -82,6 +108,11 @@ class SweepReport:
     def complete(self) -> bool:
         """Every run of the sweep is in the folder."""
         return self.skipped + self.computed == self.total
+
+    @property
+    def failed(self) -> int:
+        """Runs in the folder that raised or ended with a status of :data:`FAILED_STATUSES`."""
+        return sum(n for s, n in self.all_statuses.items() if s == RAISED or s in FAILED_STATUSES)
 
 
 def check_address(scheduler: str) -> str:
@@ -202,7 +233,8 @@ def run_sweep(
         on_row: Called with each row after it is buffered (tests, notebooks).
 
     Returns:
-        The report (counts, rate).
+        The report (counts, rate, and the statuses of every run in the folder:
+        :attr:`SweepReport.failed` tells whether the sweep failed).
 
     Raises:
         ScenarioError: The sweep file, or its first run's scenario, is invalid.
@@ -230,6 +262,7 @@ def run_sweep(
     if store is not None and not todo:
         store.compact()
         report.results = store.path
+        report.all_statuses = read_statuses(out)
         return report
     bar = RunProgress(sweep.name, len(todo), enabled=progress)
     with nullcontext(client) if client is not None else dask_client(workers, scheduler) as dask:
@@ -239,6 +272,7 @@ def run_sweep(
         _execute(dask, sweep, todo, store, report, bar, keep_trajectories, on_row)
     if report.complete:
         store.compact()
+    report.all_statuses = read_statuses(out)
     return report
 
 
@@ -309,7 +343,7 @@ def _execute(
         taken.add(run.run_id)
         buffer.append(row)
         report.statuses[row["status"]] += 1
-        bar.update(1, failed=int(row["status"] == "error"))
+        bar.update(1, failed=int(row["status"] == RAISED))
         if on_row is not None:
             on_row(row)
 
@@ -361,7 +395,7 @@ def _row(future: Any, run: RunSpec) -> dict[str, Any] | None:
     elif future.status == "error":
         exc = future.exception()
         message = f"{type(exc).__name__}: {exc}"
-        row = {"run_id": run.run_id, "status": "error", "reason": message, "error": message}
+        row = {"run_id": run.run_id, "status": RAISED, "reason": message, "error": message}
     else:  # cancelled (e.g. the scheduler restarted): not recorded, a rerun computes it
         return None
     return {"run_id": run.run_id, **run.params, **{k: v for k, v in row.items() if k != "run_id"}}

@@ -32,6 +32,7 @@ import json
 import os
 import shutil
 import uuid
+from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -67,8 +68,8 @@ COLUMNS: tuple[tuple[str, str], ...] = (
 )
 """Columns after ``run_id`` and the parameters, with their types.
 
-``status`` is the run's (``completed``, ``deadlock``, ``diverged``) or
-``error`` for a run that raised (``error`` then holds the message).
+``status`` is the run's (``completed``, ``deadlock``, ``diverged``,
+``violated``) or ``error`` for a run that raised (``error`` then holds the message).
 ``wall_time_s`` is the tracking loop's, ``run_wall_time_s`` the whole task's
 (scenario, build, run) on the worker [s]. ``events`` and
 ``min_obstacle_distance_by_obstacle`` are JSON text.
@@ -367,6 +368,35 @@ def read_results(out: str | Path) -> list[dict[str, Any]]:
                 row[c] = _from_csv(raw.get(c, ""), kind)
             rows.append(row)
     return rows
+
+
+def read_statuses(out: str | Path) -> Counter[str]:
+    """How many runs of a sweep's output folder have each ``status`` (one per run id).
+
+    Reads only the ``run_id`` and ``status`` columns (a run written twice, by an
+    interrupted compaction, counts once).
+
+    Raises:
+        FileNotFoundError: ``out`` holds no sweep manifest.
+    """
+    out = Path(out)
+    manifest = _read_manifest(out)
+    if manifest is None:
+        raise FileNotFoundError(f"{out / MANIFEST}: not a sweep output folder")
+    status: dict[str, str] = {}
+    if manifest["format"] == "parquet":
+        table = _read_parquet(out / PARQUET, ["run_id", "status"])
+        if table is not None:
+            pairs = zip(
+                table.column("run_id").to_pylist(), table.column("status").to_pylist(), strict=True
+            )
+            for run_id, value in pairs:
+                status.setdefault(run_id, value)
+    elif (out / CSV).exists():
+        with open(out / CSV, newline="", encoding="utf-8") as f:
+            for row in csv.DictReader(f):
+                status.setdefault(row["run_id"], row["status"])
+    return Counter(status.values())
 
 
 def read_manifest(out: str | Path) -> dict[str, Any] | None:

@@ -1,4 +1,4 @@
-r"""Desired task trajectories ``x_d(t)``, ``xdot_d(t)`` (METHOD.md, eq. (6)-(7)).
+r"""Desired task trajectories ``x_d(t)``, ``xdot_d(t)`` (docs/method.md, eq. (6)-(7)).
 
 Contract: a :class:`Trajectory` has a ``duration`` [s] and a ``sample(t)``
 method that evaluates the whole time grid ``t`` (N,) [s] at once (vectorised,

@@ -14,7 +14,7 @@ from clik.trajectory.reference import Reference
 class Hold(Trajectory):
     """Constant target with zero velocity.
 
-    Useful alone (regulation to a point, where law (9) of METHOD.md has zero
+    Useful alone (regulation to a point, where law (9) of docs/method.md has zero
     steady-state error) or as the orientation part of a
     :class:`~clik.trajectory.pose.PoseTrajectory` whose position moves; the
     default duration 0 then defers to the other part's duration.

@@ -12,7 +12,7 @@ from clik.trajectory.reference import Reference
 
 
 class Line(Trajectory):
-    r"""Straight line from ``start`` to ``goal`` (the case study's reference, METHOD.md).
+    r"""Straight line from ``start`` to ``goal`` (the case study's reference, docs/method.md).
 
     .. math::
 

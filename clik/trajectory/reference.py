@@ -22,7 +22,7 @@ class Reference:
     """A desired task trajectory sampled on a time grid (N samples).
 
     This is what the solver tracks: ``x_d(t_k)`` and ``xdot_d(t_k)`` of
-    METHOD.md for every sample ``k``. Position and linear velocity come
+    docs/method.md for every sample ``k``. Position and linear velocity come
     together (both or neither), and so do rotation and angular velocity;
     at least one of the two pairs is given. Velocities are expressed in the
     world frame (``LOCAL_WORLD_ALIGNED``).

@@ -100,15 +100,7 @@ var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
 </html>
 """
 
-_LEGEND = (
-    (palette.REFERENCE, "reference"),
-    (palette.TRAIL, "path"),
-    (palette.OBSTACLE, "obstacle, threshold"),
-    (palette.ROW_ACTIVE, "active obstacle row"),
-    (palette.MONITOR_NEAR, "closest link inside"),
-    (palette.MONITOR_CLEAR, "outside threshold"),
-    (palette.JOINT_LIMIT_ACTIVE, "joint range row active"),
-)
+_LEGEND = palette.LEGEND
 """Colour swatches of the caption."""
 
 

@@ -72,7 +72,7 @@ def obstacle_commands(obstacles: list[dict[str, Any]], t0: float = 0.0) -> list[
         if threshold > 0.0:
             shell = obstacle_shape(spec, inflate=threshold)
             material = phong_material(
-                palette.OBSTACLE, opacity=palette.OBSTACLE_SHELL_OPACITY, flat=shell.is_mesh
+                palette.OBSTACLE_SHELL, opacity=palette.OBSTACLE_SHELL_OPACITY, flat=shell.is_mesh
             )
             commands.append(
                 set_object(

@@ -1,4 +1,10 @@
-"""Colours of clik's scenes (RGB in [0, 1]), chosen to stay apart from each other."""
+"""Colours of clik's scenes (RGB in [0, 1]), chosen to stay apart from each other.
+
+Every element that has a legend entry (:data:`LEGEND`) has a colour of its own:
+no two entries share a colour, and none is close to another or to the
+background (``tests/test_viz.py`` checks a CIELAB distance of at least 25
+between any two of them).
+"""
 
 from __future__ import annotations
 
@@ -9,18 +15,20 @@ BACKGROUND_BOTTOM = (0.77, 0.8, 0.84)
 
 OBSTACLE = (0.45, 0.2, 0.65)
 """Obstacle body (purple)."""
+OBSTACLE_SHELL = (0.0, 0.75, 0.8)
+"""Threshold shell drawn around each obstacle (cyan, translucent)."""
 OBSTACLE_SHELL_OPACITY = 0.22
-"""Opacity of the threshold shell drawn around each obstacle (same colour as the body)."""
+"""Opacity of the threshold shell."""
 
-REFERENCE = (0.05, 0.6, 0.2)
-"""Reference path of the task frame (green line)."""
+REFERENCE = (0.1, 0.35, 0.95)
+"""Reference path of the task frame (blue line)."""
 TRAIL = (0.12, 0.12, 0.12)
 """Path the task frame followed, growing along the animation (dark line)."""
 
 ROW_ACTIVE = (0.9, 0.05, 0.05)
 """Witness segment of an active obstacle (or self-collision) row (red)."""
-MONITOR_NEAR = (1.0, 0.6, 0.0)
-"""Closest link-obstacle segment inside the threshold but with no active row (amber)."""
+MONITOR_NEAR = (1.0, 0.5, 0.0)
+"""Closest link-obstacle segment inside the threshold but with no active row (orange)."""
 MONITOR_CLEAR = (0.15, 0.65, 0.3)
 """Closest link-obstacle segment outside the threshold (green)."""
 
@@ -28,3 +36,16 @@ JOINT_LIMIT_ACTIVE = (0.85, 0.1, 0.8)
 """Links of a joint whose range row is active (magenta)."""
 JOINT_LIMIT_NEAR = (0.95, 0.85, 0.1)
 """Links of a joint inside its range threshold, row not active (yellow)."""
+
+LEGEND = (
+    (REFERENCE, "reference"),
+    (TRAIL, "path"),
+    (OBSTACLE, "obstacle"),
+    (OBSTACLE_SHELL, "obstacle threshold"),
+    (ROW_ACTIVE, "active obstacle row"),
+    (MONITOR_NEAR, "closest link inside threshold"),
+    (MONITOR_CLEAR, "closest link outside threshold"),
+    (JOINT_LIMIT_ACTIVE, "joint range row active"),
+    (JOINT_LIMIT_NEAR, "joint inside range threshold"),
+)
+"""``(colour, label)`` of each element of the tracking scene's legend (the HTML caption)."""

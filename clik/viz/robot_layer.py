@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from clik.constraints.joint_limits import limits_by_q
 from clik.viz import palette
 from clik.viz.commands import (
     Command,
@@ -117,15 +118,15 @@ def joint_range_states(robot: Robot, result: TrackingResult, timeline: Timeline)
     model = robot.model
     states = np.zeros((len(timeline), model.njoints), dtype=np.int8)
     used = result.info.get("summary_extra", {}).get("joint_limits_used")
-    if used and len(used.get("lower", [])) == model.nq:
-        lower, upper = np.asarray(used["lower"]), np.asarray(used["upper"])
-        threshold = np.asarray(used["threshold"])
+    by_q = limits_by_q(used, robot, model.nq) if used else None
+    if by_q is not None:
+        lower, upper, threshold = by_q
         q = result.q[timeline.index]
         for j in range(1, model.njoints):
             joint = model.joints[j]
-            if joint.nq != 1:
-                continue
             i = joint.idx_q
+            if joint.nq != 1 or not np.isfinite(threshold[i]):
+                continue  # no range row (continuous, other joints)
             near = (q[:, i] >= upper[i] - threshold[i]) | (q[:, i] <= lower[i] + threshold[i])
             states[near, j] = NEAR
     active = result.extra.get("active")

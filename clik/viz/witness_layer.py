@@ -1,6 +1,6 @@
 """Witness segments: what the obstacle rows see, frame by frame.
 
-An obstacle row (METHOD.md, eqs. (13)-(15)) acts along the segment between its
+An obstacle row (docs/method.md, eqs. (13)-(15)) acts along the segment between its
 two witness points, ``p_o`` on the link and ``c`` on the obstacle. Two kinds
 of segments are drawn:
 

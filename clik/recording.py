@@ -1,0 +1,121 @@
+"""The record of a run: every ``record_every``-th sample (and the last), preallocated.
+
+Scalars over the whole run (``joint_min``, ``joint_max``) see every sample, recorded
+or not. With decimation, ``qddot`` is the backward difference of ``qdot`` at each
+recorded sample (not across the gap); without it, differences of the record.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class Recorder:
+    """Preallocated arrays for ``N`` samples kept every ``every``-th.
+
+    Args:
+        N: Samples in the run.
+        every: Keep every ``every``-th sample and the last.
+        nq, nv: Configuration and velocity sizes.
+        reference: Record the position reference.
+        orientation: Record the orientation error norm.
+        constraints: Record the active row count and the minimum obstacle distance.
+    """
+
+    def __init__(
+        self,
+        N: int,
+        every: int,
+        nq: int,
+        nv: int,
+        reference: bool,
+        orientation: bool,
+        constraints: bool,
+    ) -> None:
+        n = (N - 1) // every + 1 + (1 if (N - 1) % every else 0)
+        self.N, self.every, self.decimated = N, every, every > 1
+        self.idx = np.empty(n, dtype=np.intp)
+        self.q = np.empty((n, nq))
+        self.qdot = np.empty((n, nv))
+        self.qddot = np.zeros((n, nv))
+        self.position = np.empty((n, 3))
+        self.reference = np.empty((n, 3)) if reference else None
+        self.error = np.empty(n)
+        self.orientation_error = np.empty(n) if orientation else None
+        self.active = np.zeros(n, dtype=np.int16) if constraints else None
+        self.distance = np.full(n, np.inf) if constraints else None
+        self.capacity = n
+        self.j = 0
+        self._qdot_prev = np.zeros(nv)
+        self.joint_min = np.empty(nq)
+        self.joint_max = np.empty(nq)
+
+    def due(self, k: int) -> bool:
+        """Whether sample ``k`` is kept."""
+        return k % self.every == 0 or k == self.N - 1
+
+    def start(self, q: np.ndarray) -> None:
+        """Initialise the running joint extremes at the start configuration."""
+        self.joint_min[:] = q
+        self.joint_max[:] = q
+
+    def keep(
+        self,
+        k: int,
+        q: np.ndarray,
+        qdot: np.ndarray,
+        position: np.ndarray,
+        reference: np.ndarray | None,
+        error: float,
+        orientation_error: float,
+    ) -> int:
+        """Store sample ``k``; returns its slot."""
+        j = self.j
+        self.idx[j] = k
+        self.q[j] = q
+        self.qdot[j] = qdot
+        self.position[j] = position
+        self.error[j] = error
+        if self.reference is not None and reference is not None:
+            self.reference[j] = reference
+        if self.orientation_error is not None:
+            self.orientation_error[j] = orientation_error
+        if self.decimated:
+            np.subtract(qdot, self._qdot_prev, out=self.qddot[j])
+        self.j = j + 1
+        return j
+
+    def every_sample(self, q: np.ndarray, qdot: np.ndarray) -> None:
+        """Running extremes and the previous ``qdot`` (decimated runs only)."""
+        if self.decimated:
+            np.minimum(self.joint_min, q, out=self.joint_min)
+            np.maximum(self.joint_max, q, out=self.joint_max)
+            self._qdot_prev[:] = qdot
+
+    def trimmed(self, dt: float) -> dict[str, np.ndarray | None]:
+        """The kept samples as result arrays (``qddot`` by differences) [SI units]."""
+        n = self.j
+        sl = slice(0, n)
+        qdot = self.qdot[sl]
+        if self.decimated:
+            qddot = self.qddot[sl] / dt
+            joint_min, joint_max = self.joint_min, self.joint_max
+        else:
+            qddot = np.zeros_like(qdot)
+            qddot[1:] = np.diff(qdot, axis=0) / dt
+            joint_min, joint_max = self.q[sl].min(axis=0), self.q[sl].max(axis=0)
+        return {
+            "q": self.q[sl],
+            "qdot": qdot,
+            "qddot": qddot,
+            "position": self.position[sl],
+            "reference_position": None if self.reference is None else self.reference[sl],
+            "task_error_norm": self.error[sl],
+            "orientation_error_norm": (
+                None if self.orientation_error is None else self.orientation_error[sl]
+            ),
+            "min_obstacle_distance": None if self.distance is None else self.distance[sl],
+            "active_count": None if self.active is None else self.active[sl],
+            "joint_min": joint_min,
+            "joint_max": joint_max,
+        }
