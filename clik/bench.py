@@ -272,6 +272,7 @@ def _clik_variant(
         result = tracker.run(trajectory, q0)
         info: dict[str, Any] = {
             "status": result.status,
+            "violations": len(result.violations),
             "max_task_error": float(result.max_task_error),
             "law": tracker.law,
         }
@@ -724,6 +725,7 @@ def memory_child(samples: int, record_every: int) -> dict[str, Any]:
         "samples": int(result.steps),
         "record_every": record_every,
         "status": result.status,
+        "violations": len(result.violations),
         "method": method,
         "baseline_mb": base / 1e6,
         "peak_mb": peak / 1e6,

@@ -18,8 +18,6 @@ from pathlib import Path
 from clik.errors import EXIT_CODES, ClikError, InputError, OutputExistsError
 from clik.result import FAILED_STATUSES, TrackingResult, write_json
 
-INFEASIBLE_STATUSES = FAILED_STATUSES
-
 SWEEP_FAILED = 1
 """Exit code of ``clik sweep`` when a run in its folder raised or ended violated or diverged."""
 
@@ -95,7 +93,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if not args.quiet:
         print_summary(run.scenario.name, summary)
         print(f"  wrote {out / 'summary.json'} and {out / 'trajectory.npz'}")
-    return EXIT_CODES["infeasible"] if result.status in INFEASIBLE_STATUSES else 0
+    return EXIT_CODES["infeasible"] if result.status in FAILED_STATUSES else 0
 
 
 def write_extras(args: argparse.Namespace, result: TrackingResult, out: Path, name: str) -> None:

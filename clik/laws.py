@@ -9,8 +9,9 @@ rows appended, ``J`` is ``J_e`` of eq. (24) and ``e`` is ``e_e`` of eq. (25).
 - ``"nonlinear"``, eq. (8): ``qdot = J^T K e + beta J^T e`` with
   ``beta = (e^T xdot_d) / (e^T J J^T e)``; for a scalar gain ``K = alpha I``
   this is ``gamma J^T e``, ``gamma = alpha + beta``.
-- ``"pseudoinverse"``, eq. (10): ``qdot = J^T (J J^T + lambda^2 I)^{-1} (K e + xdot_d)``,
-  the damped pseudoinverse (``lambda = 0``: the Moore-Penrose one).
+- ``"pseudoinverse"``, eq. (10): ``qdot = J^+ (K e + xdot_d)``, solved by
+  :func:`prioritized` with the constraint rows first and the task in their null
+  space, singularity-robust (:func:`damped_solve`).
 """
 
 from __future__ import annotations
@@ -89,32 +90,6 @@ def nonlinear(
     return out
 
 
-def pseudoinverse(
-    J: np.ndarray,
-    e: np.ndarray,
-    K: np.ndarray,
-    xdot_d: np.ndarray,
-    out: np.ndarray,
-    work: np.ndarray,
-    damping: float,
-) -> np.ndarray:
-    """Pseudoinverse law with feed-forward, eq. (10): ``qdot = J^+ (K e + xdot_d)``.
-
-    Solves the small (r, r) system ``(J J^T + lambda^2 I) y = K e + xdot_d``
-    and returns ``J^T y``; a singular system without damping falls back to
-    the SVD pseudoinverse.
-
-    Args:
-        damping: ``lambda`` [same unit as J's rows]; 0 for the exact pseudoinverse.
-    """
-    np.multiply(K, e, out=work)
-    work += xdot_d
-    A = J.dot(J.T)
-    if damping > 0.0:
-        A.flat[:: A.shape[0] + 1] += damping * damping
-    return J.T.dot(solve_small(A, work), out=out)
-
-
 def solve_small(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``A^-1 b`` for a small square ``A``; the SVD pseudoinverse when ``A`` is singular.
 
@@ -181,17 +156,6 @@ def damped_solve(A: np.ndarray, b: np.ndarray, epsilon: float, damping: float) -
     return V.dot(V.T.dot(b) / w)
 
 
-def null_space_projector(C: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
-    """Orthonormal basis ``V_r`` (k, n) of the row space of ``C`` and ``N = I - V_r^T V_r``.
-
-    Singular values below ``tolerance`` count as zero: a constraint row that duplicates
-    another one adds no direction.
-    """
-    _, s, vt = np.linalg.svd(C, full_matrices=False)
-    basis = vt[s > tolerance]
-    return basis, np.eye(C.shape[1]) - basis.T @ basis
-
-
 def _within_budget(qdot: np.ndarray, dt: float) -> np.ndarray:
     """``qdot`` scaled down whole so that no joint moves more than ``STEP_BUDGET`` in ``dt``."""
     step = float(np.abs(qdot).max()) * dt if qdot.size else 0.0
@@ -219,7 +183,7 @@ def prioritized(
         \dot q_c = C^{\#} b_c, \qquad N = I - C^{+} C, \qquad
         \dot q = \dot q_c + (J N)^{\#} (b - J \dot q_c)
 
-    (Siciliano and Slotine 1991; Chiaverini 1997), ``#`` the damped pseudoinverse of
+    (Siciliano and Slotine 1991; Chiaverini 1997), ``#`` the filtered pseudoinverse of
     :func:`damped_solve`. Where ``(J; C)`` has full rank this is exactly
     ``J_e^+ (K e_e + ydot_d)`` of eq. (10) on the extended task (24)-(25); where the task
     and the constraints conflict (``J N`` loses rank) the constraints still hold and the
@@ -250,11 +214,13 @@ def prioritized(
     scale = math.sqrt(float(np.max(np.einsum("ij,ij->i", J, J)))) if J.size else 0.0
     epsilon = CONDITION_RATIO * scale
     if C.shape[0]:
-        _, N = null_space_projector(C, 1e-9 * max(scale, 1.0))
-        qdot_c = _within_budget(
-            C.T.dot(damped_solve(C.dot(C.T), b_constraint, epsilon, damping)), dt
-        )
-        JN = J.dot(N)
+        # One SVD, C = U diag(s) V^T, serves both levels: the filtered inverse of C, and
+        # the null-space projection J N = J - (J V_r) V_r^T on its row space V_r.
+        U, sv, Vt = np.linalg.svd(C, full_matrices=False)
+        gain = sv / (np.maximum(sv * sv, epsilon * epsilon) + damping * damping)
+        qdot_c = _within_budget(Vt.T.dot(gain * U.T.dot(b_constraint)), dt)
+        rows = Vt[sv > 1e-9 * max(scale, 1.0)]  # a duplicated row adds no direction
+        JN = J - J.dot(rows.T).dot(rows)
         rest = b_task - J.dot(qdot_c)
         qdot_t = _within_budget(JN.T.dot(damped_solve(JN.dot(JN.T), rest, epsilon, damping)), dt)
         np.add(qdot_c, qdot_t, out=out)

@@ -37,6 +37,7 @@ from clik.violations import JointRange, ViolationMonitor
 if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
     from clik.constraints.constraint_run import ConstraintRun
+    from clik.robot import Robot
 
 ProgressCallback = Callable[[int, int], None]
 
@@ -110,7 +111,6 @@ class Tracker:
         m, nv = task.m, self.robot.nv
         limit = constraints.row_limit(m, self.law) if constraints is not None else 0
         self.rows = m + limit
-        self.out_of_reach = ""
         self._b = np.zeros(self.rows)
         self._work = np.zeros(self.rows)
         self._jte = np.zeros(nv)
@@ -196,16 +196,20 @@ class Tracker:
                 self.dt,
             )
         t = time_grid(trajectory.duration + settle, self.dt)
-        chunks = self._reference(trajectory, t)
+        chunks, out_of_reach = self._reference(trajectory, t)
         self._warn_stability(q)
         settings = StopSettings(
             deadlock_window, deadlock_ratio, deadlock_error, max_joint_step, stall_window,
             stall_progress,
         )  # fmt: skip
-        return _Run(self, t, chunks, int(record_every), settings, progress).execute(q)
+        run = _Run(self, t, chunks, int(record_every), settings, progress)
+        return run.execute(q, out_of_reach)
 
-    def _reference(self, trajectory: Trajectory, t: np.ndarray) -> ReferenceChunks:
-        """The reference in chunks; a warning names a position beyond the frame's reach."""
+    def _reference(self, trajectory: Trajectory, t: np.ndarray) -> tuple[ReferenceChunks, str]:
+        """The reference in chunks, and why it is out of reach ("" when it is not).
+
+        A position beyond the frame's reach is named here, before the run, by a warning.
+        """
         task = self.task
         center, reach, first = (None, math.inf, "")
         if task.has_position:
@@ -213,15 +217,15 @@ class Tracker:
         finite = math.isfinite(reach)
         chunks = ReferenceChunks(task, trajectory, t, REFERENCE_CHUNK, center if finite else None)
         farthest, when = chunks.farthest
-        self.out_of_reach = ""
-        if finite and farthest > reach + 1e-9:
-            self.out_of_reach = (
-                f"the reference is out of reach: at t = {when:.6g} s it lies {farthest:.4g} m "
-                f"from joint {first!r}, farther than the {reach:.4g} m that frame "
-                f"{task.frame!r} can reach (the sum of the chain's link offsets)"
-            )
-            warnings.warn(self.out_of_reach, ReachWarning, stacklevel=4)
-        return chunks
+        if not (finite and farthest > reach + 1e-9):
+            return chunks, ""
+        out_of_reach = (
+            f"the reference is out of reach: at t = {when:.6g} s it lies {farthest:.4g} m "
+            f"from joint {first!r}, farther than the {reach:.4g} m that frame "
+            f"{task.frame!r} can reach (the sum of the chain's link offsets)"
+        )
+        warnings.warn(out_of_reach, ReachWarning, stacklevel=4)
+        return chunks, out_of_reach
 
     def _warn_stability(self, q: np.ndarray) -> None:
         """Warn when the gains break explicit Euler's bound at ``q0``."""
@@ -355,7 +359,7 @@ class _Run:
         crun = self.crun
         if crun is None:
             return
-        if crun.cset.obstacles:
+        if crun.min_distance < 0.0:  # a penetrating pair is always evaluated: exact
             for o in np.flatnonzero(crun.dist_o < 0.0):
                 key = crun.cset.pair_names[int(crun.link_o[o])][o]
                 self.monitor.observe_penetration(tk, key, float(crun.dist_o[o]))
@@ -375,8 +379,13 @@ class _Run:
 
     # -- the loop ----------------------------------------------------------------------
 
-    def execute(self, q: np.ndarray) -> TrackingResult:
-        """Run every sample; returns the result."""
+    def execute(self, q: np.ndarray, out_of_reach: str = "") -> TrackingResult:
+        """Run every sample from ``q``; returns the result.
+
+        Args:
+            q: Start configuration.
+            out_of_reach: Why the reference is out of reach, added to a failed run's reason.
+        """
         model, m, dt, N = self.robot.model, self.task.m, self.dt, self.N
         crun, rec, t = self.crun, self.rec, self.t
         qdot = np.zeros(self.robot.nv)
@@ -418,8 +427,8 @@ class _Run:
         wall = time.perf_counter() - start
         if self.progress is not None:
             self.progress(N if status == "completed" else steps, N)
-        if status != "completed" and self.tr.out_of_reach:
-            reason += f"; {self.tr.out_of_reach}"
+        if status != "completed" and out_of_reach:
+            reason += f"; {out_of_reach}"
         status, reason = self._final_status(status, reason)
         return self._result(status, reason, wall, steps, max_err, err)
 
@@ -511,12 +520,13 @@ class _Run:
         )
 
 
-def _joint_range(robot: object, cset: ConstraintSet | None) -> JointRange:
+def _joint_range(robot: Robot, cset: ConstraintSet | None) -> JointRange:
     """The robot's limits, tightened by the joint-range constraint's where it has one."""
     jl = None if cset is None else cset.joint_limits
     if jl is None:
-        return JointRange(robot)  # type: ignore[arg-type]
-    return JointRange(robot, jl.lower, jl.upper, None, list(jl.joint_names))  # type: ignore[arg-type]
+        return JointRange(robot)
+    tighter = zip(jl.joint_names, jl.lower, jl.upper, strict=True)
+    return JointRange(robot, {name: (float(lo), float(hi)) for name, lo, hi in tighter})
 
 
 LWA = pin.LOCAL_WORLD_ALIGNED

@@ -15,6 +15,7 @@ A run that would be ``completed`` but has violations ends ``violated``.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -61,29 +62,24 @@ class JointRange:
 
     Args:
         robot: The robot (its URDF limits).
-        lower, upper: A joint-range constraint's limits per limited joint, or None.
-        q_index: Configuration index of each of those joints.
-        names: Their joint names.
+        tighter: A joint-range constraint's ``(lower, upper)`` per joint name [rad or m].
     """
 
     def __init__(
         self,
         robot: Robot,
-        lower: np.ndarray | None = None,
-        upper: np.ndarray | None = None,
-        q_index: np.ndarray | None = None,
-        names: list[str] | None = None,
+        tighter: Mapping[str, tuple[float, float]] | None = None,
     ) -> None:
         index, low, high, labels = [], [], [], []
         model = robot.model
+        given = tighter or {}
         for name, joint in zip(robot.joint_names, model.joints[1:], strict=True):
             if joint.nq != 1 or joint.nv != 1:
                 continue  # continuous, spherical, free: no position limits
             i = joint.idx_q
             lo, hi = float(model.lowerPositionLimit[i]), float(model.upperPositionLimit[i])
-            if names is not None and name in names and lower is not None and upper is not None:
-                s = names.index(name)
-                lo, hi = max(lo, float(lower[s])), min(hi, float(upper[s]))
+            if name in given:
+                lo, hi = max(lo, float(given[name][0])), min(hi, float(given[name][1]))
             if math.isfinite(lo) or math.isfinite(hi):
                 index.append(i)
                 low.append(lo)

@@ -9,7 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from limits_check import assert_summary_within_limits, assert_within_limits
 
+import clik
 from clik import ScenarioError
 from clik.cli import main
 from clik.demo import scenario_path
@@ -32,6 +34,8 @@ def test_solve_writes_summary_matching_the_api(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     api = build(scenario).execute()
     assert summary["status"] == api.status == "completed"
+    assert_summary_within_limits(summary, api.robot)
+    assert_within_limits(api, api.robot)
     assert summary["steps"] == api.steps == 3001
     assert summary["max_task_error"] == pytest.approx(api.max_task_error, rel=1e-9)
     assert summary["final_task_error"] == pytest.approx(api.final_task_error, rel=1e-9)
@@ -164,6 +168,7 @@ def test_demo_runs_the_case_study(tmp_path, capsys):
     for name in ("case_study_unconstrained", "case_study_both_pinv"):
         summary = json.loads((out / name / "summary.json").read_text())
         assert summary["status"] == "completed"
+        assert_summary_within_limits(summary, clik.Robot.load("planar4r"))
         assert (out / name / "trajectory.npz").is_file()
     unconstrained = json.loads((out / "case_study_unconstrained" / "summary.json").read_text())
     assert unconstrained["max_task_error"] < 1e-3

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
+from limits_check import assert_within_limits
 
 import clik
 from clik.constraints import CollisionScene, ConstraintSet, JointLimits, Obstacle, obstacle_row
@@ -179,6 +180,7 @@ def test_case_study_claims(runs):
     dist = {n: res.summary()["min_obstacle_distance"] for n, res in r.items()}
     for res in r.values():
         assert res.status == "completed"
+        assert_within_limits(res, res.robot)  # the URDF's limits; the -80 deg one below
     # 1: link 4 hits the obstacle, q3 passes -80 deg
     assert dist["unconstrained"] < 1e-4 and q3max["unconstrained"] > Q3_LIMIT
     # 2: no collision, q3 still passes -80 deg
@@ -238,6 +240,7 @@ def test_panda_sphere_avoided(panda, panda_line):
         cs = ConstraintSet(panda, obstacles=[BALL], obstacle_threshold=0.05, joint_limits=jl)
         result = clik.Tracker(task, law="pseudoinverse", constraints=cs).run(line)
         assert result.status == "completed"
+        assert_within_limits(result, panda, obstacle_floor=0.05 - 0.002)
         assert result.summary()["min_obstacle_distance"] >= 0.05 - 0.002
         assert result.max_task_error < 5e-3
         assert np.all(result.joint_min >= panda.lower) and np.all(result.joint_max <= panda.upper)

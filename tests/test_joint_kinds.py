@@ -14,6 +14,7 @@ import warnings
 import numpy as np
 import pinocchio as pin
 import pytest
+from limits_check import assert_within_limits
 from matplotlib.figure import Figure
 from urdf_snippets import urdf_text  # the tests folder is on sys.path (rootdir conftest)
 
@@ -224,6 +225,7 @@ def test_follower_stays_put_along_a_tracked_run(panda8):
     line = clik.trajectory.Line(p0, p0 + [0.0, 0.05, -0.03], duration=0.3)
     result = clik.track(task, line, q0=q0, law="pseudoinverse", gain=100.0)
     assert result.status == "completed"
+    assert_within_limits(result, panda8)
     assert np.ptp(result.q[:, 3]) > 0.01  # the arm moved
     full = pin.buildModelFromUrdf(str(panda8.source_path))  # finger 2 free, set to 0.001
     for q in result.q[:: max(1, len(result.q) // 10)]:

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import clik
 from clik.cli import main
 from clik.demo import scenario_path
 from clik.result import TrackingResult, atomic_write, write_json
@@ -60,6 +61,8 @@ LONG_RUN = textwrap.dedent(
     wall = time.perf_counter() - start
     print(json.dumps({{
         "status": result.status, "steps": result.steps, "samples": len(result.t),
+        "violations": result.violations,
+        "joint_min": result.joint_min.tolist(), "joint_max": result.joint_max.tolist(),
         "t_step": float(np.diff(result.t).max()), "last_t": float(result.t[-1]),
         "max_task_error": result.max_task_error, "final_task_error": result.final_task_error,
         "recorded_max_error": float(result.task_error_norm.max()),
@@ -80,7 +83,10 @@ def long_run() -> dict:
 
 @pytest.mark.slow
 def test_a_million_steps_complete_with_decimated_recording(long_run):
-    assert long_run["status"] == "completed"
+    assert long_run["status"] == "completed" and long_run["violations"] == []
+    robot = clik.Robot.load("planar4r")  # every step's joints inside the URDF limits
+    assert np.all(np.asarray(long_run["joint_min"]) >= robot.lower)
+    assert np.all(np.asarray(long_run["joint_max"]) <= robot.upper)
     assert long_run["steps"] == STEPS  # N = duration / dt + 1 samples
     assert long_run["samples"] == STEPS // RECORD_EVERY + 1
     assert long_run["t_step"] == pytest.approx(RECORD_EVERY * 1e-3)

@@ -14,6 +14,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 import pytest
+from limits_check import assert_within_limits
 
 import clik
 from clik import StabilityWarning
@@ -23,15 +24,6 @@ from clik.runner import build
 from clik.trajectory import Hold, Line
 
 Q0 = np.radians([180.0, -30.0, -90.0, -30.0])
-
-
-def assert_clean(result: clik.TrackingResult, robot: clik.Robot, distance_floor: float = 0.0):
-    """No limit crossed: joints inside the robot's limits, recorded distances above the floor."""
-    assert result.violations == []
-    low, high = robot.lower, robot.upper
-    assert np.all(result.q >= low - 1e-9) and np.all(result.q <= high + 1e-9)
-    if result.min_obstacle_distance is not None:
-        assert np.nanmin(result.min_obstacle_distance) >= distance_floor
 
 
 def test_stretched_planar_arm_with_unstable_gain_is_not_completed(planar4r):
@@ -97,7 +89,7 @@ def test_five_joint_arm_past_a_box_keeps_its_limits(tmp_path):
     result = clik.track(task, line, q0=q0, law="pseudoinverse", constraints=constraints)
     assert result.status in ("completed", "deadlock"), result.reason
     assert np.abs(np.diff(result.q, axis=0)).max() <= 0.05
-    assert_clean(result, robot)
+    assert_within_limits(result, robot)
     if result.status == "deadlock":
         assert "in conflict with" in result.reason or "no constraint is active" in result.reason
 
@@ -136,7 +128,7 @@ def test_masked_task_error_counts_only_its_own_rows(planar4r):
     assert result.max_task_error == pytest.approx(x_error, abs=1e-12)
     assert result.max_task_error < 1e-6
     assert result.status == "completed", result.reason  # no deadlock on a false error
-    assert_clean(result, planar4r)
+    assert_within_limits(result, planar4r)
 
 
 def test_a_constraint_set_shared_by_two_trackers_constrains_both(planar4r):
@@ -152,7 +144,7 @@ def test_a_constraint_set_shared_by_two_trackers_constrains_both(planar4r):
     a2 = first.run(line, Q0)  # after the second tracker used the set
     for result in (a1, a2):
         assert result.status == "completed", result.reason
-        assert_clean(result, planar4r, distance_floor=0.03 - 1e-4)
+        assert_within_limits(result, planar4r, obstacle_floor=0.03 - 1e-4)
     assert a2.events == a1.events
     np.testing.assert_allclose(a2.q, a1.q, atol=1e-12)
 
@@ -211,7 +203,7 @@ def test_start_inside_a_threshold_is_recovered_without_a_jump(planar4r):
     assert result.min_obstacle_distance[0] < 0.06 - 0.01
     assert result.min_obstacle_distance[-1] >= 0.06 - 1e-4
     assert np.abs(np.diff(result.q, axis=0)).max() <= 0.05
-    assert_clean(result, planar4r)
+    assert_within_limits(result, planar4r)
 
 
 def test_reach_is_named_before_the_run(planar4r):

@@ -21,7 +21,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from limits_check import assert_summary_within_limits, assert_within_limits
 
+import clik
 from clik import ScenarioError
 from clik.cli import main
 from clik.demo import scenario_path
@@ -382,6 +384,7 @@ def test_run_one_matches_the_api_and_loads_the_robot_once(tmp_path):
     assert robot_loads() - before <= 1  # cached per worker thread (0 if cached already)
     api = build(sweep.scenario(sweep.runs[1])).execute()
     assert rows[1]["status"] == api.status == "completed"
+    assert_within_limits(api, api.robot)
     assert rows[1]["steps"] == api.steps
     assert rows[1]["max_task_error"] == pytest.approx(api.max_task_error, rel=1e-12)
     assert rows[1]["min_obstacle_distance"] == pytest.approx(
@@ -524,6 +527,7 @@ def test_local_cluster_sweep_with_trajectories_errors_and_csv(tmp_path, local_cl
     assert good["status"] == "completed" and good["error"] is None
     folder = out / "runs" / good["run_id"]
     summary = json.loads((folder / "summary.json").read_text())
+    assert_summary_within_limits(summary, clik.Robot.load("planar4r"))
     assert summary["max_task_error"] == pytest.approx(good["max_task_error"], rel=1e-12)
     with np.load(folder / "trajectory.npz") as npz:
         assert npz["q"].shape == (good["steps"], 4)

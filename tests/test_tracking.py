@@ -8,6 +8,7 @@ import warnings
 import numpy as np
 import pinocchio as pin
 import pytest
+from limits_check import assert_within_limits
 
 import clik
 from clik import InputError, StabilityWarning, Task, TrackingResult, track
@@ -40,6 +41,7 @@ def test_transpose_error_shrinks_as_one_over_alpha(case):
 def test_pseudoinverse_tracks_below_a_micrometre(case):
     result = run(case, "pseudoinverse", 1000.0)
     assert result.status == "completed"
+    assert_within_limits(result, result.robot)
     assert result.max_task_error < 1e-6
 
 
@@ -79,6 +81,9 @@ def test_save_and_load(case, tmp_path):
     np.testing.assert_array_equal(back.q, result.q)
     np.testing.assert_array_equal(back.task_error_norm, result.task_error_norm)
     assert back.status == "completed" and back.steps == 3001
+    assert back.violations == result.violations == []
+    np.testing.assert_array_equal(back.joint_max, result.joint_max)
+    assert_within_limits(back, result.robot)
     assert back.info["law"] == "transpose"
 
 
@@ -96,6 +101,7 @@ def test_panda_pose_circle_with_slerp(panda):
     traj = PoseTrajectory(circle, Slerp(start.rotation, goal, duration=3.0))
     result = track(task, traj, law="pseudoinverse", gain=1000.0, dt=1e-3)
     assert result.status == "completed"
+    assert_within_limits(result, panda)
     assert result.max_task_error < 1e-3
     assert result.orientation_error_norm.max() < 1e-3
 

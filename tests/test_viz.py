@@ -21,6 +21,7 @@ import numpy as np
 import psutil
 import pytest
 import umsgpack
+from limits_check import assert_within_limits
 
 import clik
 from clik.cli import write_outputs
@@ -51,9 +52,7 @@ def panda_run() -> TrackingResult:
     q0 = robot.q_reference
     start = task.placement(q0)
     p0 = start.translation
-    trajectory = Circle.through(
-        p0, p0 + [0.0, 0.12, 0.0], [1.0, 0.0, 0.0], 2 * np.pi, duration=3.0
-    )
+    trajectory = Circle.through(p0, p0 + [0.0, 0.12, 0.0], [1.0, 0.0, 0.0], 2 * np.pi, duration=3.0)
     ball = Obstacle("ball", "sphere", p0 + [0.1, 0.06, -0.2], radius=0.05, threshold=0.05)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -125,6 +124,7 @@ class TestExportHtml:
 
     def test_panda_visual_html_is_under_budget(self, panda_result, tmp_path):
         assert panda_result.status == "completed"
+        assert_within_limits(panda_result, panda_result.robot, obstacle_floor=0.05 - 1e-3)
         visual = export_html(panda_result, tmp_path / "visual.html")
         collision = export_html(panda_result, tmp_path / "collision.html", geometry="collision")
         print(

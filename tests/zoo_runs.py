@@ -33,7 +33,6 @@ class ZooRun:
     min_distance: float = float("nan")
     max_joint_step: float = float("nan")
     result: clik.TrackingResult | None = None
-    limits: tuple[np.ndarray, np.ndarray] | None = None
 
 
 def deepest_frame(robot: clik.Robot) -> str:
@@ -67,15 +66,7 @@ def zoo_run(name: str, direction: np.ndarray = DIRECTION) -> ZooRun:
         return ZooRun(name, type(exc).__name__, str(exc).splitlines()[0][:200])
     dq = np.abs(np.diff(result.q, axis=0)).max() if len(result.q) > 1 else 0.0
     md = result.summary()["min_obstacle_distance"]
-    return ZooRun(
-        name,
-        result.status,
-        result.reason,
-        float(md),
-        float(dq),
-        result,
-        (np.maximum(robot.lower, -1e300), np.minimum(robot.upper, 1e300)),
-    )
+    return ZooRun(name, result.status, result.reason, float(md), float(dq), result)
 
 
 if __name__ == "__main__":

@@ -153,6 +153,7 @@ class ConstraintRun:
         speed = np.linalg.norm(cset.obs_vel, axis=1) * dt
         self._obs_step = speed[None, :] if np.any(speed > 0.0) else None
         self._obs_index = np.arange(n_obs)
+        self._everywhere = np.full(n_obs, np.inf)  # the margin of a recorded sample
 
     # -- per sample --------------------------------------------------------------------
 
@@ -285,7 +286,7 @@ class ConstraintRun:
         near = np.less(lb, cset.thr_matrix, out=self._near)
         todo = np.argwhere(near).tolist() if near.any() else []
         todo += [c.pair for c in self.active if c.kind == "obstacle"]
-        margin_o = np.full_like(cset.margin, np.inf) if exact else cset.margin
+        margin_o = self._everywhere if exact else cset.margin
         obs_index = self._obs_index
         placed = False
         while True:  # evaluate, then the nearest pair of each obstacle, until settled
@@ -377,33 +378,15 @@ class ConstraintRun:
             if c.kind == "joint":
                 cset.joint_limits.row(c.index, row)  # type: ignore[union-attr]
                 c.feed = 0.0
-            elif c.kind == "obstacle":
+            else:  # obstacle (13)-(15), or a link pair: the second link in the obstacle's place
                 Jp = point_jacobian(model, data, c.joint, c.point_a)
+                if c.kind == "obstacle":
+                    form, velocity = cset.form, cset.obs_vel[c.obstacle]
+                else:
+                    Jp = Jp - point_jacobian(model, data, c.joint_b, c.point_b)
+                    form, velocity = "normalized", _NO_POINT
                 c.error, c.feed = obstacle_row(
-                    cset.form,
-                    c.threshold,
-                    c.distance,
-                    c.point_a,
-                    c.point_b,
-                    c.normal,
-                    Jp,
-                    cset.obs_vel[c.obstacle],
-                    row,
-                )
-            else:
-                Jp = point_jacobian(model, data, c.joint, c.point_a) - point_jacobian(
-                    model, data, c.joint_b, c.point_b
-                )
-                c.error, c.feed = obstacle_row(
-                    "normalized",
-                    c.threshold,
-                    c.distance,
-                    c.point_a,
-                    c.point_b,
-                    c.normal,
-                    Jp,
-                    _NO_POINT,
-                    row,
+                    form, c.threshold, c.distance, c.point_a, c.point_b, c.normal, Jp, velocity, row
                 )
             ext.e[m + s] = c.error
             ext.ff[m + s] = c.feed

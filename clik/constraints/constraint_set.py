@@ -47,9 +47,11 @@ class ConstraintSet:
         release: ``"projection"`` (default) or ``"sign"``.
         hysteresis: With the sign rule, release only when the error is below
             ``-hysteresis * threshold``.
-        max_active: Bound on active rows (default and maximum ``n - m``, eq. (22)).
-        monitor_margin: An obstacle's recorded distance is exact within
-            ``threshold + monitor_margin`` [m]; beyond it, a lower bound no smaller than that
+        max_active: Bound on active rows (default and maximum: ``n - m`` under laws (9)
+            and (8), eq. (22); ``n`` under law (10), see :meth:`row_limit`).
+        monitor_margin: An obstacle's nearest distance is evaluated exactly within
+            ``threshold + monitor_margin`` [m] on every sample (and on recorded samples
+            everywhere); beyond it, only a lower bound is kept between recordings
             (``min_obstacle_distance_exact_by_obstacle`` in the summary says which).
 
     Default gains: with law (10) every row gets the task's largest gain ``alpha``
@@ -114,7 +116,6 @@ class ConstraintSet:
         self.monitor_margin = float(monitor_margin)
         self._links = links
         self._self_collision = self_collision
-        self.max_rows = robot.nv  # type: ignore[attr-defined]
         self.set_obstacles(self.obstacles)
 
     # -- obstacles between runs ----------------------------------------------------------

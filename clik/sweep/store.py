@@ -332,6 +332,18 @@ def check_folder(out: Path, fingerprint: str, force: bool = False) -> bool:
     return False
 
 
+def _manifest_of(out: Path) -> dict[str, Any]:
+    """The manifest of a sweep's output folder.
+
+    Raises:
+        FileNotFoundError: ``out`` holds no sweep manifest.
+    """
+    manifest = _read_manifest(out)
+    if manifest is None:
+        raise FileNotFoundError(f"{out / MANIFEST}: not a sweep output folder")
+    return manifest
+
+
 def read_results(out: str | Path) -> list[dict[str, Any]]:
     """The rows of a sweep's output folder, one per run id, parameters decoded.
 
@@ -341,9 +353,7 @@ def read_results(out: str | Path) -> list[dict[str, Any]]:
         FileNotFoundError: ``out`` holds no sweep manifest.
     """
     out = Path(out)
-    manifest = _read_manifest(out)
-    if manifest is None:
-        raise FileNotFoundError(f"{out / MANIFEST}: not a sweep output folder")
+    manifest = _manifest_of(out)
     parameters = list(manifest["parameters"])
     json_parameters = set(manifest.get("json_parameters", []))
     if manifest["format"] == "parquet":
@@ -380,9 +390,7 @@ def read_statuses(out: str | Path) -> Counter[str]:
         FileNotFoundError: ``out`` holds no sweep manifest.
     """
     out = Path(out)
-    manifest = _read_manifest(out)
-    if manifest is None:
-        raise FileNotFoundError(f"{out / MANIFEST}: not a sweep output folder")
+    manifest = _manifest_of(out)
     status: dict[str, str] = {}
     if manifest["format"] == "parquet":
         table = _read_parquet(out / PARQUET, ["run_id", "status"])
