@@ -1,6 +1,7 @@
 # clik: the two commands of the README, and a few more.
 #   make demo   creates .venv, installs clik, runs the case study (out/demo)
 #   make test   creates .venv with the test extras, runs every test and notebook
+#   make lint   ruff (style, docstrings) and mypy (types) on clik/
 
 PYTHON ?= python3
 VENV   ?= .venv
@@ -15,11 +16,13 @@ $(PY):
 	$(PIP) install --quiet --upgrade pip
 
 $(VENV)/.installed: $(PY) pyproject.toml
-	$(PIP) install --quiet -e .
+	@echo "installing clik and its dependencies (Pinocchio, coal, meshcat, Dask...) into $(VENV)"
+	$(PIP) install --progress-bar on -e .
 	touch $@
 
 $(VENV)/.installed-test: $(PY) pyproject.toml
-	$(PIP) install --quiet -e ".[test,notebooks,bench]"
+	@echo "installing clik with its test, notebook, benchmark and lint extras into $(VENV)"
+	$(PIP) install --progress-bar on -e ".[test,notebooks,bench,lint]"
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed
@@ -29,8 +32,9 @@ test: $(VENV)/.installed-test
 	$(PY) -m pytest tests $(if $(NOTEBOOKS),--nbmake --nbmake-timeout=120 $(NOTEBOOKS)) --timeout=600 -q
 
 lint: $(VENV)/.installed-test
-	$(PIP) install --quiet ruff
 	$(VENV)/bin/ruff check clik tests
+	$(VENV)/bin/ruff format --check clik tests
+	$(VENV)/bin/mypy
 
 bench: $(VENV)/.installed
 	$(PIP) install --quiet -e ".[bench]"

@@ -14,6 +14,9 @@ Example:
     >>> result = clik.track(task, line, q0=q0, law="transpose", gain=1000, dt=1e-3)
 """
 
+from importlib.metadata import PackageNotFoundError, version
+from typing import TYPE_CHECKING, Any
+
 from clik import trajectory
 from clik.errors import (
     ClikError,
@@ -52,9 +55,30 @@ __all__ = [
     "Tracker",
     "TrackingResult",
     "UnknownRobotError",
+    "plot",
     "solve",
     "track",
     "trajectory",
+    "viz",
 ]
 
-__version__ = "0.1.0"
+try:
+    __version__ = version("clik")
+    """The installed distribution's version (one source: ``pyproject.toml``)."""
+except PackageNotFoundError:  # a source tree on sys.path, not installed
+    __version__ = "0+unknown"
+
+if TYPE_CHECKING:
+    from clik import plot, viz
+
+_LAZY = ("plot", "viz")
+"""Submodules imported on first use (matplotlib and meshcat load only when asked)."""
+
+
+def __getattr__(name: str) -> Any:
+    """``clik.plot`` and ``clik.viz`` without importing them in ``import clik``."""
+    if name in _LAZY:
+        import importlib
+
+        return importlib.import_module(f"clik.{name}")
+    raise AttributeError(f"module 'clik' has no attribute {name!r}")

@@ -10,56 +10,44 @@ written), 2 bad input, 3 infeasible (the run stopped with ``deadlock`` or
 from __future__ import annotations
 
 import argparse
+import math
 import sys
-import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
-from clik.errors import EXIT_CODES, ClikError, InputError, OutputExistsError
-from clik.result import FAILED_STATUSES, TrackingResult, write_json
+from tqdm import tqdm
+
+from clik.errors import EXIT_CODES, ClikError
+from clik.io import prepare_out
+from clik.result import FAILED_STATUSES, TrackingResult, write_outputs
 
 SWEEP_FAILED = 1
 """Exit code of ``clik sweep`` when a run in its folder raised or ended violated or diverged."""
 
 
-def prepare_out(out: Path, force: bool) -> Path:
-    """Create the output folder; an existing non-empty one needs ``force``."""
-    if out.exists() and not out.is_dir():
-        raise InputError("--out", "a folder (this is an existing file)", str(out))
-    if out.exists() and any(out.iterdir()) and not force:
-        raise OutputExistsError(out)
-    out.mkdir(parents=True, exist_ok=True)
-    return out
-
-
 class ProgressBar:
-    """A one-line progress bar on stderr, shown only on a terminal."""
+    """A run's progress on stderr (tqdm), shown only on a terminal unless ``enabled``.
+
+    Args:
+        label: Shown before the bar (the scenario's name).
+        enabled: ``None``: only when stderr is a terminal.
+    """
 
     def __init__(self, label: str, enabled: bool | None = None) -> None:
         self.label = label
         self.enabled = sys.stderr.isatty() if enabled is None else enabled
-        self.start = time.perf_counter()
+        self.bar: tqdm | None = None
 
     def __call__(self, k: int, n: int) -> None:
+        """Sample ``k`` of ``n`` is done (the tracker's progress callback)."""
         if not self.enabled:
             return
-        width = 30
-        done = int(width * k / max(n, 1))
-        elapsed = time.perf_counter() - self.start
-        sys.stderr.write(
-            f"\r{self.label} [{'#' * done}{'.' * (width - done)}] {k}/{n} {elapsed:.1f}s"
-        )
+        if self.bar is None:
+            self.bar = tqdm(total=n, desc=self.label, unit="sample", file=sys.stderr)
+        self.bar.update(k - self.bar.n)
         if k >= n:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
-
-
-def write_outputs(result: TrackingResult, out: Path) -> dict:
-    """Write ``summary.json`` and ``trajectory.npz`` into ``out``; returns the summary."""
-    summary = result.summary()
-    result.save(out / "trajectory.npz")
-    write_json(out / "summary.json", summary)  # last: it exists only once both are complete
-    return summary
+            self.bar.close()
 
 
 def print_summary(name: str, summary: dict) -> None:
@@ -83,6 +71,7 @@ def print_summary(name: str, summary: dict) -> None:
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
+    """``clik solve``: run a scenario file, write its outputs; 3 when the run failed."""
     from clik.runner import build
 
     run = build(args.scenario)
@@ -109,6 +98,7 @@ def write_extras(args: argparse.Namespace, result: TrackingResult, out: Path, na
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
+    """``clik demo``: the paper's case study, with its table and figures."""
     from clik.demo import run_demo
 
     return run_demo(
@@ -121,6 +111,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_show(args: argparse.Namespace) -> int:
+    """``clik show``: the live 3-D view of a scenario or an output folder."""
     from clik.viz import show_path
 
     show_path(Path(args.target), block=not args.no_block)
@@ -128,13 +119,15 @@ def cmd_show(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from clik.bench import run_bench
+    """``clik bench``: the benchmark suite (``bench.json``, ``bench.md``)."""
+    from clik.bench.suite import run_bench
 
     run_bench(Path(args.out), quick=args.quick, log=None if args.quiet else print)
     return 0
 
 
 def cmd_robots(args: argparse.Namespace) -> int:
+    """``clik robots``: the robots known by name, and where each is found."""
     from clik.robot import Robot
 
     for name, where in Robot.available().items():
@@ -204,19 +197,24 @@ def _lock_item(text: str) -> tuple[str, float]:
         raise argparse.ArgumentTypeError(f"expected JOINT=VALUE, got {text!r}") from None
 
 
-def cmd_reach(args: argparse.Namespace) -> int:
-    import math
+def _radians3(degrees: Sequence[float]) -> tuple[float, float, float]:
+    """Three angles from degrees to radians."""
+    roll, pitch, yaw = (math.radians(v) for v in degrees)
+    return roll, pitch, yaw
 
-    from clik.sweep.reach import ReachSpec, check_spec, reach_map, write_reach
+
+def cmd_reach(args: argparse.Namespace) -> int:
+    """``clik reach``: a reachability map over a grid of target points."""
+    from clik.sweep.reach import check_spec, reach_map
+    from clik.sweep.reach_data import ReachSpec
+    from clik.sweep.reach_output import write_reach
 
     spec = ReachSpec(
         robot=args.robot,
         frame=args.frame,
         box=tuple(args.box),
         step=args.step,
-        orientation_rpy=None
-        if args.orientation is None
-        else tuple(math.radians(v) for v in args.orientation),
+        orientation_rpy=None if args.orientation is None else _radians3(args.orientation),
         lock=dict(args.lock or []),
         axes=tuple(args.axes) if args.axes else None,
         restarts=args.restarts,
@@ -240,12 +238,8 @@ def cmd_reach(args: argparse.Namespace) -> int:
     return 0
 
 
-def parser() -> argparse.ArgumentParser:
-    """The argument parser (exposed for tests and docs)."""
-    p = argparse.ArgumentParser(prog="clik", description=__doc__.splitlines()[0])
-    p.add_argument("--debug", action="store_true", help="show tracebacks")
-    sub = p.add_subparsers(dest="command", required=True)
-
+def _add_solve(sub: Any) -> None:
+    """The ``clik solve`` subcommand."""
     s = sub.add_parser("solve", help="run a scenario file")
     s.add_argument("scenario", type=Path)
     s.add_argument("--out", required=True, help="output folder")
@@ -255,6 +249,9 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--quiet", action="store_true")
     s.set_defaults(func=cmd_solve)
 
+
+def _add_demo(sub: Any) -> None:
+    """The ``clik demo`` subcommand."""
     d = sub.add_parser("demo", help="run the paper's case study")
     d.add_argument("--out", default="out/demo")
     d.add_argument("--force", action="store_true")
@@ -267,20 +264,32 @@ def parser() -> argparse.ArgumentParser:
     d.add_argument("--quiet", action="store_true")
     d.set_defaults(func=cmd_demo)
 
+
+def _add_show(sub: Any) -> None:
+    """The ``clik show`` subcommand."""
     v = sub.add_parser("show", help="open the live 3-D view of a scenario or an output folder")
     v.add_argument("target")
     v.add_argument("--no-block", action="store_true", help="return once the scene is shown")
     v.set_defaults(func=cmd_show)
 
+
+def _add_robots(sub: Any) -> None:
+    """The ``clik robots`` subcommand."""
     r = sub.add_parser("robots", help="list the robots known by name")
     r.set_defaults(func=cmd_robots)
 
+
+def _add_bench(sub: Any) -> None:
+    """The ``clik bench`` subcommand."""
     b = sub.add_parser("bench", help="run the benchmark suite (writes bench.json, bench.md)")
     b.add_argument("--out", default="out/bench", help="output folder")
     b.add_argument("--quick", action="store_true", help="a smoke run of a few seconds")
     b.add_argument("--quiet", action="store_true")
     b.set_defaults(func=cmd_bench)
 
+
+def _add_sweep(sub: Any) -> None:
+    """The ``clik sweep`` subcommand."""
     w = sub.add_parser(
         "sweep",
         help="run a sweep file (many scenarios) on Dask",
@@ -303,6 +312,9 @@ def parser() -> argparse.ArgumentParser:
     w.add_argument("--quiet", action="store_true")
     w.set_defaults(func=cmd_sweep)
 
+
+def _add_reach(sub: Any) -> None:
+    """The ``clik reach`` subcommand."""
     a = sub.add_parser("reach", help="reachability map: single-pose IK over a grid of points")
     a.add_argument("robot", help="robot name or URDF path")
     a.add_argument("--frame", required=True, help="the frame to place")
@@ -341,6 +353,19 @@ def parser() -> argparse.ArgumentParser:
     a.add_argument("--quiet", action="store_true")
     a.set_defaults(func=cmd_reach)
 
+
+def parser() -> argparse.ArgumentParser:
+    """The argument parser (exposed for tests and docs)."""
+    p = argparse.ArgumentParser(prog="clik", description=__doc__.splitlines()[0].replace("``", ""))
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    sub = p.add_subparsers(dest="command", required=True)
+    _add_solve(sub)
+    _add_demo(sub)
+    _add_show(sub)
+    _add_robots(sub)
+    _add_bench(sub)
+    _add_sweep(sub)
+    _add_reach(sub)
     return p
 
 

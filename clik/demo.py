@@ -3,27 +3,11 @@
 from __future__ import annotations
 
 import math
-from importlib import resources
 from pathlib import Path
 
-from clik.result import TrackingResult
-
-CASE_STUDY = (
-    "case_study_unconstrained",
-    "case_study_obstacle",
-    "case_study_joint_limit",
-    "case_study_both",
-    "case_study_unconstrained_pinv",
-    "case_study_obstacle_pinv",
-    "case_study_joint_limit_pinv",
-    "case_study_both_pinv",
-)
-"""The shipped case-study scenarios: runs 1-4 with law (9), then with law (10)."""
-
-
-def scenario_path(name: str) -> Path:
-    """Path of a shipped scenario file (``name`` without ``.toml``)."""
-    return Path(str(resources.files("clik.scenarios").joinpath(f"{name}.toml")))
+from clik.io import prepare_out
+from clik.result import TrackingResult, write_outputs
+from clik.scenarios import CASE_STUDY, scenario_path
 
 
 def case_study_table(names: list[str], results: list[TrackingResult]) -> str:
@@ -54,7 +38,6 @@ def run_demo(
     names: tuple[str, ...] = CASE_STUDY,
 ) -> int:
     """Run the case-study scenarios; write each run's outputs under ``out/<name>/``."""
-    from clik.cli import prepare_out, write_outputs
     from clik.runner import build
 
     prepare_out(out, force)

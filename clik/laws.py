@@ -17,7 +17,8 @@ rows appended, ``J`` is ``J_e`` of eq. (24) and ``e`` is ``e_e`` of eq. (25).
 from __future__ import annotations
 
 import math
-from typing import Literal
+from collections.abc import Callable
+from typing import Literal, cast
 
 import numpy as np
 
@@ -31,7 +32,7 @@ def check_law(law: str) -> LawName:
     """Return ``law`` if it is a known law name, else raise :class:`InputError`."""
     if law not in LAWS:
         raise InputError("law", "one of 'transpose', 'nonlinear', 'pseudoinverse'", law)
-    return law  # type: ignore[return-value]
+    return cast(LawName, law)
 
 
 def transpose(
@@ -73,6 +74,12 @@ def nonlinear(
     clipped to ``|beta| <= beta_max`` [1/s] (docs/method.md: "filter it").
 
     Args:
+        J: Task Jacobian (r, n).
+        e: Task error (r,).
+        K: Gains per row [1/s] (r,).
+        xdot_d: Reference velocity (r,).
+        out: Joint velocity output (n,) [rad/s].
+        work: Scratch array (r,).
         jte: Scratch array (n,) for ``J^T e``.
         beta_max: Bound on ``|beta|`` [1/s].
     """
@@ -106,6 +113,7 @@ def _numpy_solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.linalg.solve(A, b)
 
 
+_solve1: Callable[[np.ndarray, np.ndarray], np.ndarray]
 try:  # numpy's private gufunc: checked once here, with a public fallback
     from numpy.linalg import _umath_linalg
 

@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from clik.io import atomic_write, write_json
 
 if TYPE_CHECKING:
     from clik.robot import Robot
@@ -153,7 +154,7 @@ class TrackingResult:
             arrays = {k: npz[k] for k in npz.files}
         meta = json.loads(str(arrays.pop("meta_json")))
         extra = {k[6:]: arrays.pop(k) for k in list(arrays) if k.startswith("extra_")}
-        kwargs = {name: arrays.get(name) for name in _ARRAYS}
+        kwargs: dict[str, Any] = {name: arrays.get(name) for name in _ARRAYS}
         return cls(
             **kwargs,
             joint_min=arrays["joint_min"],
@@ -163,39 +164,12 @@ class TrackingResult:
         )
 
 
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
+def write_outputs(result: TrackingResult, out: Path) -> dict[str, Any]:
+    """Write ``trajectory.npz`` then ``summary.json`` into ``out``; returns the summary.
 
-
-_FILE_MODE = 0o666 & ~_umask()
-"""Permissions of a written file: what ``open`` would give (``mkstemp`` gives 0600)."""
-
-
-def atomic_write(path: Path, write: Any, mode: str = "wb") -> None:
-    """Write ``path`` through ``write(file)`` into a temporary file, then rename it.
-
-    The temporary file sits in the same folder (a hidden ``.<name>.*.tmp``), is
-    flushed to disk, then renamed over ``path``: a run killed midway leaves
-    either the old file or none, never a truncated one. On an exception the
-    temporary file is removed and ``path`` is untouched.
+    The summary is written last: it exists only once both files are complete.
     """
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, mode) as f:
-            write(f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.chmod(tmp, _FILE_MODE)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def write_json(path: Path, data: Any) -> None:
-    """Write ``data`` as indented JSON, atomically."""
-    text = json.dumps(data, indent=2, allow_nan=False)
-    atomic_write(path, lambda f: f.write(text + "\n"), mode="w")
+    summary = result.summary()
+    result.save(out / "trajectory.npz")
+    write_json(out / "summary.json", summary)
+    return summary

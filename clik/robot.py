@@ -32,9 +32,11 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from os.path import join
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
+from lxml import etree
 
 from clik.errors import (
     FrameNotFound,
@@ -91,28 +93,30 @@ class Mimic:
     offset: float = 0.0
 
 
-class JointValues(list):
-    """Joint values as a scenario writes them, with their unit; the robot converts them.
+@dataclass(frozen=True)
+class JointValues:
+    """Joint values as a scenario writes them, with the unit of their angles.
 
-    The list holds the values scaled as if every one were an angle (so with
-    ``unit = "deg"`` a revolute robot's values are in radians, as before);
-    :meth:`Robot.check_configuration` and :meth:`Robot.configuration` use
-    :attr:`written` and :attr:`unit` instead, converting only the angles
-    (revolute and continuous joints) and keeping prismatic values in metres.
+    Which value is an angle is known only with the robot, so the values are
+    kept as written: :meth:`Robot.check_configuration` converts them with
+    :meth:`Robot.configuration`, turning only the angles (revolute and
+    continuous joints) from ``unit`` into radians and keeping prismatic values
+    in metres.
 
     Attributes:
         written: The values as written (revolute in ``unit``, prismatic in metres).
         unit: ``"rad"`` or ``"deg"``.
+
+    Raises:
+        InputError: ``unit`` is not ``"rad"`` or ``"deg"``.
     """
 
-    def __init__(self, written: Sequence[float], unit: str = "rad") -> None:
-        scale = _unit_scale(unit, "unit")
-        super().__init__(float(v) * scale for v in written)
-        self.written = [float(v) for v in written]
-        self.unit = unit
+    written: tuple[float, ...]
+    unit: str = "rad"
 
-    def __reduce__(self) -> tuple[type, tuple[list[float], str]]:
-        return (JointValues, (self.written, self.unit))
+    def __post_init__(self) -> None:
+        _unit_scale(self.unit, "unit")
+        object.__setattr__(self, "written", tuple(float(v) for v in self.written))
 
 
 def _unit_scale(unit: str, field: str) -> float:
@@ -122,13 +126,13 @@ def _unit_scale(unit: str, field: str) -> float:
     return math.pi / 180.0 if unit == "deg" else 1.0
 
 
-def joint_kind(joint: object) -> str:
+def joint_kind(joint: pin.JointModel) -> str:
     """Kind of a Pinocchio joint model: :data:`REVOLUTE`, :data:`CONTINUOUS`, ...
 
     Args:
         joint: An entry of ``model.joints``.
     """
-    nq, nv, name = joint.nq, joint.nv, joint.shortname()  # type: ignore[attr-defined]
+    nq, nv, name = joint.nq, joint.nv, joint.shortname()
     if nq == 1 and nv == 1:
         return PRISMATIC if name.startswith("JointModelP") else REVOLUTE  # PX, PY, PZ, Prismatic...
     if nq == 2 and nv == 1:
@@ -227,21 +231,9 @@ class Robot:
         Warns:
             MimicJointWarning: Mimic followers were locked while their leader is free.
         """
-        source_str = str(source)
-        srdf, posture = None, None
-        if Path(source).is_file() or Path(source).suffix == ".urdf" or "/" in source_str:
-            urdf = Path(source)
-            name = urdf.stem
-            default_dirs = _parent_dirs(urdf)
-        elif source_str in _our_robots():
-            urdf, name = _our_robots()[source_str], source_str
-            default_dirs = [urdf.parent]
-        elif source_str in _erd_robots():
-            urdf, default_dirs, srdf, posture = _erd_files(source_str)
-            name = source_str
-        else:
-            raise UnknownRobotError(source_str, Robot.available())
-        dirs = [str(d) for d in (default_dirs if package_dirs is None else package_dirs)]
+        files = _source_files(source)
+        urdf = files.urdf
+        dirs = [str(d) for d in (files.package_dirs if package_dirs is None else package_dirs)]
 
         root = check_urdf(urdf, dirs)
         mimics = _mimic_joints(root, urdf)
@@ -253,8 +245,8 @@ class Robot:
         except (ValueError, RuntimeError) as error:
             problem = f"Pinocchio cannot build the model: {native_message(error)}"
             raise RobotLoadError(urdf, problem) from None
-        q_reference = _reference_configuration(model, srdf, posture)
-        robot = cls(name, urdf.resolve(), dirs, model, collision_model, q_reference)
+        q_reference = _reference_configuration(model, files.srdf, files.posture)
+        robot = cls(files.name, urdf.resolve(), dirs, model, collision_model, q_reference)
         robot._source_digest = digest
         robot.mimics = mimics
         names = robot.joint_names
@@ -270,47 +262,22 @@ class Robot:
         their leader implies (see :meth:`load`).
         """
         q_full = self.q_reference
-        values: dict[str, float] = {}
-        for joint_name, value in lock.items():
-            joint = self.model.joints[self.joint_id(joint_name)]
-            low, high = self.lower[joint.idx_q], self.upper[joint.idx_q]
-            continuous = joint_kind(joint) == CONTINUOUS
-            try:
-                value = float(value)
-            except (TypeError, ValueError):
-                value = math.nan
-            if joint.nv != 1 or not (math.isfinite(value) and (continuous or low <= value <= high)):
-                expected = f"a value within the joint's limits [{low:g}, {high:g}]"
-                raise InputError(f"lock[{joint_name!r}]", expected, got=value)
-            values[joint_name] = value
+        values = self._lock_values(lock)
         implied = self._mimic_values(mimics or {}, values)
         values.update({follower: value for follower, (_, value) in implied.items()})
         free_leaders = {f: lv for f, lv in implied.items() if lv[0] not in values}
-        joint_ids = []
+        joint_ids: list[int] = []
         for joint_name, value in values.items():
             joint_id = self.model.getJointId(joint_name)
-            joint = self.model.joints[joint_id]
-            q_slice = slice(joint.idx_q, joint.idx_q + joint.nq)
-            continuous = joint_kind(joint) == CONTINUOUS
-            q_full[q_slice] = (math.cos(value), math.sin(value)) if continuous else value
+            continuous = joint_kind(self.model.joints[joint_id]) == CONTINUOUS
+            q_full[_q_slice(self.model, joint_id)] = (
+                (math.cos(value), math.sin(value)) if continuous else value
+            )
             joint_ids.append(joint_id)
         if len(joint_ids) == self.model.njoints - 1:
             raise InputError("lock", "at least one joint left free", got=list(lock))
         if free_leaders:
-            listing = "; ".join(
-                f"{f!r} = {v:.6g} {self._unit_of(f)} (mimics {lead!r})"
-                for f, (lead, v) in free_leaders.items()
-            )
-            warnings.warn(
-                MimicJointWarning(
-                    f"{self.name}: mimic joint(s) locked at the value their leader's reference "
-                    f"implies, the leader left free (clik moves every joint independently, so "
-                    f"the follower does not follow): {listing}; lock the leader too to keep "
-                    "them consistent",
-                    free_leaders,
-                ),
-                stacklevel=3,
-            )
+            self._warn_free_leaders(free_leaders)
         model, (collision_model,) = pin.buildReducedModel(
             self.model, [self.collision_model], sorted(joint_ids), q_full
         )
@@ -325,6 +292,50 @@ class Robot:
         robot.mimics = dict(self.mimics)
         robot.locked = values
         return robot
+
+    def _lock_values(self, lock: Mapping[str, float]) -> dict[str, float]:
+        """The values of ``lock`` as floats, each checked against its joint.
+
+        Raises:
+            JointNotFound: A joint in ``lock`` does not exist.
+            InputError: A joint is not one-DOF, or its value is not finite or
+                outside the joint's limits (continuous joints have none).
+        """
+        values: dict[str, float] = {}
+        for joint_name, given in lock.items():
+            joint = self.model.joints[self.joint_id(joint_name)]
+            low, high = self.lower[joint.idx_q], self.upper[joint.idx_q]
+            continuous = joint_kind(joint) == CONTINUOUS
+            try:
+                value = float(given)
+            except (TypeError, ValueError):
+                value = math.nan
+            if joint.nv != 1 or not (math.isfinite(value) and (continuous or low <= value <= high)):
+                expected = f"a value within the joint's limits [{low:g}, {high:g}]"
+                raise InputError(f"lock[{joint_name!r}]", expected, got=value)
+            values[joint_name] = value
+        return values
+
+    def _warn_free_leaders(self, free_leaders: Mapping[str, tuple[str, float]]) -> None:
+        """Warn that these mimic followers were locked while their leader stays free.
+
+        Args:
+            free_leaders: Follower name -> (leader name, value it is locked at).
+        """
+        listing = "; ".join(
+            f"{f!r} = {v:.6g} {self._unit_of(f)} (mimics {lead!r})"
+            for f, (lead, v) in free_leaders.items()
+        )
+        warnings.warn(
+            MimicJointWarning(
+                f"{self.name}: mimic joint(s) locked at the value their leader's reference "
+                f"implies, the leader left free (clik moves every joint independently, so "
+                f"the follower does not follow): {listing}; lock the leader too to keep "
+                "them consistent",
+                dict(free_leaders),
+            ),
+            stacklevel=4,
+        )
 
     def _mimic_values(
         self, mimics: Mapping[str, Mimic], values: Mapping[str, float]
@@ -392,28 +403,32 @@ class Robot:
             RobotLoadError: The URDF was removed or changed since the robot was
                 loaded, or its visual meshes cannot be read.
         """
-        if self._visual_model is None and self.source_path is None:
-            self._visual_model = pin.GeometryModel()
         if self._visual_model is None:
             path = self.source_path
-            if self._source_digest is not None and _digest(path) != self._source_digest:
-                raise RobotLoadError(
-                    path,
-                    "the file was removed or changed since the robot was loaded "
-                    "(its visual geometry is read on first use); load the robot again",
-                )
-            try:
-                visual = pin.buildGeomFromUrdf(
-                    self._full_model, str(path), pin.VISUAL, package_dirs=self.package_dirs
-                )
-            except (ValueError, RuntimeError) as error:
-                problem = f"Pinocchio cannot read the visual geometry: {native_message(error)}"
-                raise RobotLoadError(path, problem) from None
-            if self._reduction is not None:
-                full_model, joint_ids, q_full = self._reduction
-                _, visual = pin.buildReducedModel(full_model, visual, joint_ids, q_full)
-            self._visual_model = visual
+            self._visual_model = (
+                pin.GeometryModel() if path is None else self._read_visual_model(path)
+            )
         return self._visual_model
+
+    def _read_visual_model(self, path: Path) -> pin.GeometryModel:
+        """The visual geometry of the URDF ``path``, reduced like :attr:`model`."""
+        if self._source_digest is not None and _digest(path) != self._source_digest:
+            raise RobotLoadError(
+                path,
+                "the file was removed or changed since the robot was loaded "
+                "(its visual geometry is read on first use); load the robot again",
+            )
+        try:
+            visual = pin.buildGeomFromUrdf(
+                self._full_model, str(path), pin.VISUAL, package_dirs=self.package_dirs
+            )
+        except (ValueError, RuntimeError) as error:
+            problem = f"Pinocchio cannot read the visual geometry: {native_message(error)}"
+            raise RobotLoadError(path, problem) from None
+        if self._reduction is not None:
+            full_model, joint_ids, q_full = self._reduction
+            _, visual = pin.buildReducedModel(full_model, visual, joint_ids, q_full)
+        return visual
 
     @property
     def _full_model(self) -> pin.Model:
@@ -436,8 +451,11 @@ class Robot:
 
     @property
     def joint_kinds(self) -> dict[str, str]:
-        """Kind of each movable joint, by name: ``"revolute"``, ``"prismatic"``,
-        ``"continuous"`` or ``"other"`` (see :data:`REVOLUTE`...)."""
+        """Kind of each movable joint, by name.
+
+        One of ``"revolute"``, ``"prismatic"``, ``"continuous"`` or ``"other"``
+        (see :data:`REVOLUTE`...).
+        """
         return {
             name: joint_kind(joint)
             for name, joint in zip(self.joint_names, self.model.joints[1:], strict=True)
@@ -445,8 +463,11 @@ class Robot:
 
     @property
     def q_units(self) -> list[str]:
-        """Unit of each configuration value, shape (nq,): ``"rad"`` (revolute),
-        ``"m"`` (prismatic) or ``""`` (a continuous joint's cos and sin, other joints)."""
+        """Unit of each configuration value, shape (nq,).
+
+        ``"rad"`` (revolute), ``"m"`` (prismatic) or ``""`` (a continuous joint's
+        cos and sin, other joints).
+        """
         units = [""] * self.nq
         for joint in self.model.joints[1:]:
             kind = joint_kind(joint)
@@ -688,7 +709,7 @@ def _shown(array: np.ndarray) -> object:
     return array.tolist() if array.size <= 20 else f"an array of shape {array.shape}"
 
 
-def _mimic_joints(root: object, urdf: Path) -> dict[str, Mimic]:
+def _mimic_joints(root: etree._Element, urdf: Path) -> dict[str, Mimic]:
     """The URDF's ``<joint><mimic joint=... multiplier=... offset=.../></joint>`` entries.
 
     Raises:
@@ -696,7 +717,7 @@ def _mimic_joints(root: object, urdf: Path) -> dict[str, Mimic]:
             offset that is not a finite number.
     """
     mimics: dict[str, Mimic] = {}
-    for joint in root.findall("joint"):  # type: ignore[attr-defined]
+    for joint in root.findall("joint"):
         element = joint.find("mimic")
         if element is None:
             continue
@@ -706,7 +727,7 @@ def _mimic_joints(root: object, urdf: Path) -> dict[str, Mimic]:
             raise RobotLoadError(
                 urdf, f"joint {name!r} has a <mimic> without joint=...", line=element.sourceline
             )
-        numbers = {}
+        numbers: dict[str, float] = {}
         for attribute, default in (("multiplier", 1.0), ("offset", 0.0)):
             text = element.get(attribute)
             try:
@@ -725,6 +746,7 @@ def _mimic_joints(root: object, urdf: Path) -> dict[str, Mimic]:
 
 
 def _q_slice(model: pin.Model, joint_id: int) -> slice:
+    """The configuration values of one joint."""
     joint = model.joints[joint_id]
     return slice(joint.idx_q, joint.idx_q + joint.nq)
 
@@ -772,7 +794,19 @@ def _our_robots() -> dict[str, Path]:
     }
 
 
-def _erd_robots() -> dict[str, type]:
+class _ErdLoader(Protocol):
+    """What clik reads of an example-robot-data loader class (never instantiated)."""
+
+    path: str
+    urdf_filename: str
+    urdf_subpath: str
+    srdf_filename: str
+    srdf_subpath: str
+    ref_posture: str
+    model_path: str | None
+
+
+def _erd_robots() -> dict[str, _ErdLoader]:
     """example-robot-data's loader classes that describe a URDF."""
     try:
         from example_robot_data.robots_loader import ROBOTS
@@ -781,11 +815,51 @@ def _erd_robots() -> dict[str, type]:
     return {name: loader for name, loader in ROBOTS.items() if loader.urdf_filename}
 
 
-def _erd_files(name: str) -> tuple[Path, list[str], Path | None, str | None]:
+@dataclass(frozen=True)
+class _SourceFiles:
+    """Where :meth:`Robot.load` reads a robot from.
+
+    Attributes:
+        name: The robot's name.
+        urdf: The URDF file.
+        package_dirs: Default folders for ``package://`` meshes.
+        srdf: The SRDF file, or None.
+        posture: Name of the SRDF's reference posture, or None.
+    """
+
+    name: str
+    urdf: Path
+    package_dirs: list[Path]
+    srdf: Path | None = None
+    posture: str | None = None
+
+
+def _source_files(source: str | Path) -> _SourceFiles:
+    """Files of ``source``: a URDF path, one of our robots, or an example-robot-data name.
+
+    Raises:
+        UnknownRobotError: ``source`` is neither a file nor a known name.
+    """
+    source_str = str(source)
+    if Path(source).is_file() or Path(source).suffix == ".urdf" or "/" in source_str:
+        urdf = Path(source)
+        return _SourceFiles(urdf.stem, urdf, _parent_dirs(urdf))
+    ours = _our_robots()
+    if source_str in ours:
+        return _SourceFiles(source_str, ours[source_str], [ours[source_str].parent])
+    if source_str in _erd_robots():
+        return _erd_files(source_str)
+    raise UnknownRobotError(source_str, Robot.available())
+
+
+def _erd_files(name: str) -> _SourceFiles:
     """URDF, package dirs, SRDF and reference posture of an example-robot-data robot.
 
     Reads the loader class's attributes without instantiating it (that would
     build a RobotWrapper with its meshes).
+
+    Raises:
+        RobotLoadError: example-robot-data does not have the URDF file.
     """
     from example_robot_data.robots_loader import getModelPath
 
@@ -799,4 +873,5 @@ def _erd_files(name: str) -> tuple[Path, list[str], Path | None, str | None]:
     if loader.srdf_filename:
         srdf = Path(model_path, loader.path, loader.srdf_subpath, loader.srdf_filename)
     urdf = Path(model_path, subpath).resolve()
-    return urdf, [str(Path(model_path, "../..").resolve())], srdf, loader.ref_posture
+    package_dirs = [Path(model_path, "../..").resolve()]
+    return _SourceFiles(name, urdf, package_dirs, srdf, loader.ref_posture)

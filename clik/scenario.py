@@ -32,10 +32,10 @@ from typing import Any
 
 import numpy as np
 
+from clik.bounds import MAX_STEPS
 from clik.errors import ClikError, ScenarioError
 from clik.robot import JointValues
 from clik.schema import Table
-from clik.tracking import MAX_STEPS
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -61,8 +61,8 @@ class Scenario:
     """A validated scenario. Angles are in radians, lengths in metres, times in seconds.
 
     Joint values are the exception (see the module's docstring): ``initial_q`` is
-    a :class:`~clik.robot.JointValues` (a list of the values scaled as angles,
-    with ``written`` and ``unit``) or None for the reference configuration, and
+    a :class:`~clik.robot.JointValues` (the values as written and their ``unit``)
+    or None for the reference configuration, and
     ``constraints["joint_limits"]`` has ``override`` (scaled as angles [rad]),
     ``override_as_written`` (in ``unit`` for revolute joints, metres for
     prismatic ones), ``unit``, ``threshold`` [rad] (revolute joints) and
@@ -72,7 +72,7 @@ class Scenario:
     file: Path
     name: str
     robot: dict[str, Any]
-    initial_q: list[float] | None
+    initial_q: JointValues | None
     task: dict[str, Any]
     trajectory: dict[str, Any]
     solver: dict[str, Any]

@@ -58,6 +58,7 @@ class SolveResult:
 
 
 def _target_arrays(target: object) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Target position and rotation, each None where ``target`` has none."""
     if isinstance(target, pin.SE3):
         return target.translation.copy(), target.rotation.copy()
     arr = np.asarray(target, dtype=float)
@@ -70,6 +71,161 @@ def _target_arrays(target: object) -> tuple[np.ndarray | None, np.ndarray | None
     raise InputError(
         "target", "a pin.SE3, a (4, 4) pose, a (3,) position or a (3, 3) rotation", arr.shape
     )
+
+
+@dataclass(frozen=True)
+class _Settings:
+    """What :func:`solve` iterates with (see its arguments)."""
+
+    law: str
+    step: float
+    damping: float
+    mu: float
+    tolerance: float
+    orientation_tolerance: float
+    max_iterations: int
+    restarts: int
+
+
+def _check_settings(settings: _Settings) -> None:
+    """Refuse settings the iteration cannot use, naming the argument."""
+    if settings.law == "nonlinear":
+        raise InputError("law", "'pseudoinverse' or 'transpose' in solve mode", settings.law)
+    if not isinstance(settings.max_iterations, int) or settings.max_iterations < 1:
+        raise InputError("max_iterations", "an integer >= 1", settings.max_iterations)
+    if not isinstance(settings.restarts, int) or settings.restarts < 0:
+        raise InputError("restarts", "an integer >= 0", settings.restarts)
+    for name in ("tolerance", "orientation_tolerance", "step"):
+        value = getattr(settings, name)
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(name, "a positive finite number", value)
+    for name in ("damping", "mu"):
+        value = getattr(settings, name)
+        if not (math.isfinite(value) and value >= 0):
+            raise InputError(name, "a finite number >= 0", value)
+
+
+class _Problem:
+    """One target for one task: the error, its Jacobian and one step of the law.
+
+    Args:
+        task: The task (its mask selects the rows).
+        target: What :func:`solve` was given.
+        settings: The iteration's settings.
+    """
+
+    def __init__(self, task: Task, target: object, settings: _Settings) -> None:
+        self.task, self.settings = task, settings
+        self.robot = task.robot
+        p_d, R_d = _target_arrays(target)
+        if task.has_position and p_d is None:
+            raise InputError("target", f"a position for the {task.kind} task")
+        if task.has_orientation and R_d is None:
+            raise InputError("target", f"an orientation for the {task.kind} task")
+        for arr in (p_d, R_d):
+            if arr is not None and not np.all(np.isfinite(arr)):
+                raise InputError("target", "finite values", arr.tolist())
+        # (unused placeholders where the task has no such rows)
+        self.p_d = np.zeros(3) if p_d is None else p_d
+        self.R_d = np.eye(3) if R_d is None else R_d
+        self.full_pose = task.m == 6
+        self.target_se3 = pin.SE3(R_d, p_d) if self.full_pose else None
+        robot = self.robot
+        bounded = np.isfinite(robot.lower) & np.isfinite(robot.upper) & (robot.nq == robot.nv)
+        self.clip = bool(bounded.any())
+        self.lo = np.where(bounded, robot.lower, -np.inf)
+        self.hi = np.where(bounded, robot.upper, np.inf)
+        self.e6 = np.zeros(6)
+        self.diagonal = slice(None, None, task.m + 1)
+
+    def error(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """Task error ``e``, its Jacobian ``J``, position [m] and orientation [rad] norms.
+
+        A full pose uses ``log6(oMf^-1 oMd)`` in the frame with its exact Jacobian
+        ``Jlog6 J_local``; a masked task the world-aligned error (6) and ``J`` (3).
+        """
+        model, data, fid = self.robot.model, self.robot.data, self.task.frame_id
+        if self.full_pose:
+            pin.computeJointJacobians(model, data, q)
+            fMd = pin.updateFramePlacement(model, data, fid).actInv(self.target_se3)
+            e = pin.log6(fMd).vector
+            J = pin.Jlog6(fMd.inverse()).dot(pin.getFrameJacobian(model, data, fid, pin.LOCAL))
+            return e, J, _norm3(e[:3]), _norm3(e[3:])
+        J6 = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
+        oMf = data.oMf[fid]
+        e6 = self.e6
+        if self.task.has_position:
+            np.subtract(self.p_d, oMf.translation, out=e6[:3])
+        if self.task.has_orientation:
+            e6[3:] = pin.log3(self.R_d.dot(oMf.rotation.T))
+        rows = self.task.rows
+        return e6[rows], J6[rows], _norm3(e6[:3]), _norm3(e6[3:])
+
+    def world_errors(self) -> tuple[float, float]:
+        """Position and orientation error norms in the world frame, at the last ``q``."""
+        oMf = self.robot.data.oMf[self.task.frame_id]
+        pos = rot = 0.0
+        if self.task.has_position:
+            pos = float(np.linalg.norm(self.p_d - oMf.translation))
+        if self.task.has_orientation:
+            rot = float(np.linalg.norm(pin.log3(self.R_d.dot(oMf.rotation.T))))
+        return pos, rot
+
+    def step(self, q: np.ndarray, e: np.ndarray, J: np.ndarray, err2: float) -> np.ndarray:
+        """One iteration, ``q (+) step qdot``, clipped into the joint limits.
+
+        Law (10): ``qdot = J^T (J J^T + lambda^2 I)^-1 e`` with
+        ``lambda^2 = lambda_0^2 + mu |e|^2`` (Levenberg-Marquardt); law (9):
+        ``qdot = J^T e``.
+        """
+        s = self.settings
+        if s.law == "pseudoinverse":
+            A = J.dot(J.T)
+            A.flat[self.diagonal] += s.damping * s.damping + s.mu * err2
+            dq = J.T.dot(solve_small(A, e))
+        else:
+            dq = J.T.dot(e)
+        dq *= s.step
+        q = pin.integrate(self.robot.model, q, dq)
+        if self.clip and ((q < self.lo).any() or (q > self.hi).any()):
+            np.maximum(q, self.lo, out=q)
+            np.minimum(q, self.hi, out=q)
+        return q
+
+    def attempt(self, q: np.ndarray) -> tuple[np.ndarray, bool, int, float, float]:
+        """Iterate from ``q`` until converged, stalled or out of iterations.
+
+        Returns:
+            The last ``q``, whether it converged, the iterations used, and the
+            position [m] and orientation [rad] error norms at the last ``q``.
+        """
+        s = self.settings
+        best, since_best = math.inf, 0
+        pos = rot = math.inf
+        for iteration in range(s.max_iterations):
+            e, J, pos, rot = self.error(q)
+            if pos <= s.tolerance and rot <= s.orientation_tolerance:
+                return q, True, iteration, *self.world_errors()
+            q = self.step(q, e, J, pos * pos + rot * rot)
+            if pos + rot < STALL_PROGRESS * best:
+                best, since_best = pos + rot, 0
+            else:
+                since_best += 1
+                if since_best >= STALL_ITERATIONS:
+                    return q, False, iteration + 1, pos, rot
+        return q, False, s.max_iterations, pos, rot
+
+
+STALL_PROGRESS = 0.999
+"""An iteration makes progress when the error falls below this fraction of the best."""
+
+STALL_ITERATIONS = 15
+"""Iterations without progress after which an attempt restarts."""
+
+
+def _norm3(v: np.ndarray) -> float:
+    a, b, c = v.tolist()
+    return math.sqrt(a * a + b * b + c * c)
 
 
 def solve(
@@ -103,125 +259,35 @@ def solve(
         restarts: Random restarts (within joint limits) after a failed attempt.
         seed: Seed of the restarts' random generator.
     """
-    law = check_law(law)
-    if law == "nonlinear":
-        raise InputError("law", "'pseudoinverse' or 'transpose' in solve mode", law)
-    if not isinstance(max_iterations, int) or max_iterations < 1:
-        raise InputError("max_iterations", "an integer >= 1", max_iterations)
-    if not isinstance(restarts, int) or restarts < 0:
-        raise InputError("restarts", "an integer >= 0", restarts)
-    for name, value in (
-        ("tolerance", tolerance),
-        ("orientation_tolerance", orientation_tolerance),
-        ("step", step),
-    ):
-        if not (math.isfinite(value) and value > 0):
-            raise InputError(name, "a positive finite number", value)
-    for name, value in (("damping", damping), ("mu", mu)):
-        if not (math.isfinite(value) and value >= 0):
-            raise InputError(name, "a finite number >= 0", value)
+    settings = _Settings(
+        check_law(law), step, damping, mu, tolerance, orientation_tolerance,
+        max_iterations, restarts,
+    )  # fmt: skip
+    _check_settings(settings)
+    problem = _Problem(task, target, settings)
     robot = task.robot
-    model, data = robot.model, robot.data
-    p_d, R_d = _target_arrays(target)
-    if task.has_position and p_d is None:
-        raise InputError("target", f"a position for the {task.kind} task")
-    if task.has_orientation and R_d is None:
-        raise InputError("target", f"an orientation for the {task.kind} task")
-    for arr in (p_d, R_d):
-        if arr is not None and not np.all(np.isfinite(arr)):
-            raise InputError("target", "finite values", arr.tolist())
     q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
     rng = None  # created at the first restart (it costs ~20 us)
-    lower, upper = robot.lower, robot.upper
-    bounded = np.isfinite(lower) & np.isfinite(upper) & (robot.nq == robot.nv)
-    clip = bool(bounded.any())
-    full_pose = task.m == 6
-    target_se3 = pin.SE3(R_d, p_d) if full_pose else None
-    lo, hi = np.where(bounded, lower, -np.inf), np.where(bounded, upper, np.inf)
-    fid, rows = task.frame_id, task.rows
-    has_pos, has_rot = task.has_position, task.has_orientation
-    e6 = np.zeros(6)
-    e_pos, e_rot = e6[:3], e6[3:]
-    pos_err = rot_err = math.inf
     iterations = 0
-    attempts = 0
-    eye_diag = slice(None, None, task.m + 1)
-    LWA = pin.LOCAL_WORLD_ALIGNED
     best_total, best_q, best_errors = math.inf, q.copy(), (math.inf, math.inf)
     start = time.perf_counter()
     with np.errstate(invalid="ignore", divide="ignore"):  # solve_small checks for NaN
-        while attempts <= restarts:
-            attempts += 1
-            since_best = 0
-            best = math.inf
-            for _ in range(max_iterations):
-                if full_pose:  # log6 error in the frame, with its exact Jacobian (Jlog6)
-                    pin.computeJointJacobians(model, data, q)
-                    fMd = pin.updateFramePlacement(model, data, fid).actInv(target_se3)
-                    e = pin.log6(fMd).vector
-                    a, b, c, x, y, z = e.tolist()
-                    pos_err = math.sqrt(a * a + b * b + c * c)
-                    rot_err = math.sqrt(x * x + y * y + z * z)
-                    J = pin.Jlog6(fMd.inverse()).dot(
-                        pin.getFrameJacobian(model, data, fid, pin.LOCAL)
-                    )
-                else:
-                    J6 = pin.computeFrameJacobian(model, data, q, fid, LWA)
-                    oMf = data.oMf[fid]
-                    if has_pos:
-                        np.subtract(p_d, oMf.translation, out=e_pos)
-                    if has_rot:
-                        e_rot[:] = pin.log3(R_d.dot(oMf.rotation.T))
-                    pos_err = math.sqrt(e_pos.dot(e_pos))
-                    rot_err = math.sqrt(e_rot.dot(e_rot))
-                    e = e6[rows]
-                    J = J6[rows]
-                if pos_err <= tolerance and rot_err <= orientation_tolerance:
-                    oMf = data.oMf[fid]
-                    if has_pos:  # report the world-frame errors, not log6's components
-                        pos_err = float(np.linalg.norm(p_d - oMf.translation))
-                    if has_rot:
-                        rot_err = float(np.linalg.norm(pin.log3(R_d.dot(oMf.rotation.T))))
-                    return SolveResult(
-                        True,
-                        f"converged in {iterations} iterations",
-                        q,
-                        iterations,
-                        attempts,
-                        pos_err,
-                        rot_err,
-                        time.perf_counter() - start,
-                    )
-                iterations += 1
-                if law == "pseudoinverse":
-                    A = J.dot(J.T)
-                    A.flat[eye_diag] += damping * damping + mu * (pos_err**2 + rot_err**2)
-                    dq = J.T.dot(solve_small(A, e))
-                else:
-                    dq = J.T.dot(e)
-                dq *= step
-                q = pin.integrate(model, q, dq)
-                if clip and ((q < lo).any() or (q > hi).any()):
-                    np.maximum(q, lo, out=q)
-                    np.minimum(q, hi, out=q)
-                total = pos_err + rot_err
-                if total < 0.999 * best:
-                    best, since_best = total, 0
-                else:
-                    since_best += 1
-                    if since_best >= 15:
-                        break
-            if pos_err + rot_err < best_total:  # keep the best attempt for a failure report
-                best_total, best_q, best_errors = pos_err + rot_err, q.copy(), (pos_err, rot_err)
-            if attempts <= restarts:
-                if rng is None:
-                    rng = np.random.default_rng(seed)
+        for attempt in range(1, restarts + 2):
+            q, converged, used, pos, rot = problem.attempt(q)
+            iterations += used
+            if converged:
+                reason = f"converged in {iterations} iterations"
+                elapsed = time.perf_counter() - start
+                return SolveResult(True, reason, q, iterations, attempt, pos, rot, elapsed)
+            if pos + rot < best_total:  # keep the best attempt for a failure report
+                best_total, best_q, best_errors = pos + rot, q.copy(), (pos, rot)
+            if attempt <= restarts:
+                rng = np.random.default_rng(seed) if rng is None else rng
                 q = robot.random_configuration(rng)
-    pos_err, rot_err = best_errors
+    pos, rot = best_errors
     reason = (
-        f"no convergence after {attempts} attempt(s), {iterations} iterations; best attempt: "
-        f"position error {pos_err:.3g} m, orientation error {rot_err:.3g} rad"
+        f"no convergence after {restarts + 1} attempt(s), {iterations} iterations; best "
+        f"attempt: position error {pos:.3g} m, orientation error {rot:.3g} rad"
     )
-    return SolveResult(
-        False, reason, best_q, iterations, attempts, pos_err, rot_err, time.perf_counter() - start
-    )
+    elapsed = time.perf_counter() - start
+    return SolveResult(False, reason, best_q, iterations, restarts + 1, pos, rot, elapsed)

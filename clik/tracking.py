@@ -21,6 +21,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
+from clik.bounds import MAX_STEPS
+from clik.constraints.constraint_run import ConstraintRun
 from clik.errors import InputError
 from clik.extended_task import ExtendedTask
 from clik.gains import row_gains, stability_margin
@@ -36,16 +38,9 @@ from clik.violations import JointRange, ViolationMonitor
 
 if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
-    from clik.constraints.constraint_run import ConstraintRun
     from clik.robot import Robot
 
 ProgressCallback = Callable[[int, int], None]
-
-
-MAX_STEPS = 100_000_000
-"""Largest run, ``(duration + settle) / dt + 1`` samples (about 15 minutes at 8 us per
-step): a typo in ``dt`` fails at once, not as a run that never ends or an allocation
-that cannot succeed."""
 
 
 class ReachWarning(UserWarning):
@@ -280,7 +275,7 @@ class _Run:
         self.crun: ConstraintRun | None = (
             None
             if cset is None
-            else cset.start(m, tracker.law, tracker.alpha, t, self.rec.capacity)
+            else ConstraintRun(cset, m, tracker.law, tracker.alpha, t, self.rec.capacity)
         )
         self.monitor = ViolationMonitor(_joint_range(robot, cset))
         self.checks = StopChecks(settings, tracker.law, self.dt)
@@ -392,8 +387,8 @@ class _Run:
         dq = np.zeros(self.robot.nv)
         status, reason = "completed", f"reached the end of the trajectory at t = {t[-1]:.6g} s"
         max_err = err = 0.0
-        steps, c0, c1 = 0, 0, 0
-        P_d = R_d = FF = at_rest = None
+        steps = 0
+        c0, c1, P_d, R_d, FF, at_rest = self.chunks.load(0)
         progress_every = max(1, N // 100)
         rec.start(q)
         start = time.perf_counter()

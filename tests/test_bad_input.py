@@ -62,9 +62,9 @@ from clik import (
 )
 from clik.cli import main
 from clik.constraints import ConstraintSet, JointLimits, Obstacle
-from clik.demo import scenario_path
 from clik.robot import Robot
 from clik.runner import build, run_scenario
+from clik.scenarios import scenario_path
 from clik.trajectory import Hold, Line
 
 DATA = Path(__file__).parent / "data"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import importlib.util
 import json
 import math
@@ -10,7 +11,11 @@ from typing import Any
 
 import pytest
 
-from clik.bench import REQUIRED_KEYS, run_bench
+from clik.bench.suite import REQUIRED_KEYS, run_bench
+from clik.bench.targets import default_targets_path, evaluate_targets, load_targets
+from clik.errors import InputError
+
+CLIK = Path(__file__).resolve().parents[1] / "clik"
 
 HAS_PINK = importlib.util.find_spec("pink") is not None and (
     importlib.util.find_spec("daqp") is not None or importlib.util.find_spec("quadprog") is not None
@@ -116,3 +121,76 @@ def test_pink_lines_and_ratios(quick):
     assert positive(report["ratios"]["pink_over_panda_pose_obstacles"])
     assert 0.0 <= report["solve"]["pink_success_rate"] <= 1.0
     assert report["pink"]["solver"] in ("daqp", "quadprog")
+
+
+def test_targets_come_from_the_shipped_toml(quick):
+    _, report = quick
+    path = default_targets_path()
+    assert path.name == "targets.toml" and path.is_file()
+    shipped = load_targets()
+    assert [t["name"] for t in report["targets"]] == [t.name for t in shipped]
+    assert [t["target"] for t in report["targets"]] == [t.wanted for t in shipped]
+    assert len(shipped) == 9
+
+
+def test_a_targets_file_is_data(quick, tmp_path):
+    _, report = quick
+    path = tmp_path / "targets.toml"
+    path.write_text(
+        '[[target]]\nname = "rate"\nmeasure = "solve.success_rate"\nop = ">="\n'
+        'bound = 0\nwanted = "any"\n'
+        '[[target]]\nname = "ratio"\nmeasure = "case_study_all_runs_s"\n'
+        'over = "case_study_all_runs_s"\nop = "<"\nbound = 0.5\nwanted = "< 0.5"\n'
+    )
+    rate, one = evaluate_targets(report, load_targets(path))
+    assert rate == {
+        "name": "rate",
+        "target": "any",
+        "value": report["solve"]["success_rate"],
+        "met": True,
+    }
+    assert one["value"] == 1.0 and one["met"] is False
+    path.write_text('[[target]]\nname = "x"\nmeasure = "a"\nop = "=="\nbound = 1\nwanted = "1"\n')
+    with pytest.raises(InputError, match="op"):
+        load_targets(path)
+
+
+def test_markdown_names_no_issue(quick):
+    out, _ = quick
+    text = (out / "bench.md").read_text()
+    assert "## Targets\n" in text
+    assert "issue" not in text.lower()
+
+
+def _imports(path: Path) -> set[str]:
+    """Modules a file imports (every import statement, TYPE_CHECKING blocks included)."""
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+            names.update(f"{node.module}.{alias.name}" for alias in node.names)
+    return names
+
+
+def test_bench_imports_flow_one_way():
+    for path in CLIK.rglob("*.py"):
+        if path.parts[-2] == "bench" or path == CLIK / "cli.py":
+            continue
+        bad = {m for m in _imports(path) if m == "clik.bench" or m.startswith("clik.bench.")}
+        assert not bad, (path, bad)
+    modules = {f"clik.bench.{p.stem}": _imports(p) for p in (CLIK / "bench").glob("*.py")}
+    graph = {m: {d for d in deps if d in modules and d != m} for m, deps in modules.items()}
+    done: set[str] = set()
+
+    def visit(module: str, stack: tuple[str, ...]) -> None:
+        assert module not in stack, f"import cycle: {' -> '.join((*stack, module))}"
+        if module in done:
+            return
+        for dep in graph[module]:
+            visit(dep, (*stack, module))
+        done.add(module)
+
+    for module in graph:
+        visit(module, ())

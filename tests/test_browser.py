@@ -25,9 +25,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from clik.demo import scenario_path
 from clik.result import TrackingResult
 from clik.runner import build
+from clik.scenarios import scenario_path
 from clik.viz import export_html, show, stop_server
 
 CHROMIUM = "/usr/bin/chromium"

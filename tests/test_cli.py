@@ -14,9 +14,9 @@ from limits_check import assert_summary_within_limits, assert_within_limits
 import clik
 from clik import ScenarioError
 from clik.cli import main
-from clik.demo import scenario_path
 from clik.runner import build
 from clik.scenario import load_scenario
+from clik.scenarios import scenario_path
 
 CASE = scenario_path("case_study_unconstrained").read_text()
 

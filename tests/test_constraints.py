@@ -13,8 +13,8 @@ from limits_check import assert_within_limits
 import clik
 from clik.constraints import CollisionScene, ConstraintSet, JointLimits, Obstacle, obstacle_row
 from clik.constraints.obstacle_rows import point_jacobian
-from clik.demo import scenario_path
 from clik.runner import build
+from clik.scenarios import scenario_path
 from clik.trajectory import Line
 
 FD = 1e-6

@@ -43,10 +43,10 @@ import pytest
 
 from clik import ClikError, GeometryError, RobotLoadError, ScenarioError
 from clik.constraints import Obstacle
-from clik.demo import scenario_path
 from clik.robot import Robot
 from clik.runner import build
 from clik.scenario import load_scenario
+from clik.scenarios import scenario_path
 
 SECRET = f"CLIK-PLANTED-{uuid.uuid4().hex}"
 """Content of the planted file: appears in no other file."""

@@ -31,8 +31,9 @@ import pytest
 
 import clik
 from clik.cli import main
-from clik.demo import scenario_path
-from clik.result import TrackingResult, atomic_write, write_json
+from clik.io import atomic_write, write_json
+from clik.result import TrackingResult
+from clik.scenarios import scenario_path
 
 STEPS = 1_000_000
 RECORD_EVERY = 1000
@@ -161,7 +162,7 @@ KILLED_MID_WRITE = textwrap.dedent(
     """
     import os, signal, sys
     from pathlib import Path
-    from clik.result import atomic_write
+    from clik.io import atomic_write
 
     def write(f):
         f.write('{"status": "compl')

@@ -7,7 +7,10 @@ limit values, labels) and on the PNG files (size in pixels).
 from __future__ import annotations
 
 import math
+import os
 import struct
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -16,10 +19,10 @@ from matplotlib.figure import Figure
 
 import clik
 from clik import plot
-from clik.demo import CASE_STUDY, scenario_path
 from clik.errors import InputError
 from clik.result import TrackingResult
 from clik.runner import build
+from clik.scenarios import CASE_STUDY, scenario_path
 
 LAW9 = [n for n in CASE_STUDY if not n.endswith("_pinv")]
 LAW10 = [n for n in CASE_STUDY if n.endswith("_pinv")]
@@ -270,3 +273,29 @@ def test_save_result_plots(case_study, plain, tmp_path):
     assert len(lines(figs["tracking_error"].axes[0])) == 2
     joints = [ax for ax in figs["joints"].axes if ax.get_visible()]
     assert len(joints) == 4 and all(len(lines(ax)) == 2 for ax in joints)
+
+
+# ------------------------------------------------------------------ import side effects
+
+
+@pytest.mark.parametrize("how", ["MPLBACKEND", "matplotlib.use"])
+def test_import_keeps_the_backend(how):
+    # A fresh interpreter without a display: importing clik.plot neither switches the
+    # backend chosen by the user (here "svg") nor imports pyplot.
+    env = {k: v for k, v in os.environ.items() if k not in ("MPLBACKEND", "DISPLAY")}
+    env.pop("WAYLAND_DISPLAY", None)
+    if how == "MPLBACKEND":
+        env["MPLBACKEND"] = "svg"
+        choose = ""
+    else:
+        choose = "matplotlib.use('svg'); "
+    code = (
+        f"import sys, matplotlib; {choose}"
+        "import clik.plot; "
+        "print(matplotlib.get_backend(), 'matplotlib.pyplot' in sys.modules)"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["svg", "False"]

@@ -8,20 +8,16 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+import pyarrow.parquet as pq
 import pytest
 
 from clik import InputError, Task
 from clik.cli import main
-from clik.sweep.reach import (
-    ReachMap,
-    ReachSpec,
-    grid_points,
-    manipulability,
-    solve_points,
-)
+from clik.sweep.reach import grid_points, manipulability, solve_points
+from clik.sweep.reach_data import ReachMap, ReachSpec
+from clik.sweep.reach_output import write_reach
 
 pytest.importorskip("distributed", reason="pip install 'dask[distributed]'")
-pq = pytest.importorskip("pyarrow.parquet", reason="pip install pyarrow")
 
 PLANAR_BOX = [-1.6, -1.6, 0.0, 1.6, 1.6, 0.0]
 """5 x 5 x 1 points 0.8 m apart around the planar arm's base; its reach is 4 x 0.3 = 1.2 m."""
@@ -113,6 +109,20 @@ def test_panda_pose_map_with_a_fixed_orientation(panda, tmp_path):
     assert lines[-1].split(",")[3] == "False" and lines[-1].endswith(",")  # no manipulability
     table = pq.read_table(reach.write_table(tmp_path / "map.parquet")).to_pydict()
     assert table["success"] == [True, True, True, False] and table["manipulability"][3] is None
+    # "auto": the suffix decides; an explicit format wins over the suffix.
+    assert reach.write_table(tmp_path / "auto.csv").read_text() == csv.read_text()
+    forced = reach.write_table(tmp_path / "forced.csv", fmt="parquet")
+    assert pq.read_table(forced).to_pydict() == table
+    with pytest.raises(InputError, match="format: expected 'auto', 'parquet' or 'csv'"):
+        reach.write_table(tmp_path / "map.xlsx", fmt="xlsx")
+    written = write_reach(reach, tmp_path / "out", html=False)
+    assert sorted(written) == ["json", "table"] and sorted(p.name for p in written.values()) == [
+        "reach.json",
+        "reach.parquet",
+    ]
+    assert pq.read_table(written["table"]).to_pydict() == table
+    info = json.loads(written["json"].read_text())
+    assert info["points"] == 4 and info["reachable"] == 3 and info["table"] == "reach.parquet"
 
 
 def test_bad_requests_exit_2(tmp_path, capsys):

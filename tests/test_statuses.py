@@ -19,8 +19,8 @@ from limits_check import assert_within_limits
 import clik
 from clik import StabilityWarning
 from clik.constraints import ConstraintSet, JointLimits, Obstacle
-from clik.demo import scenario_path
 from clik.runner import build
+from clik.scenarios import scenario_path
 from clik.trajectory import Hold, Line
 
 Q0 = np.radians([180.0, -30.0, -90.0, -30.0])

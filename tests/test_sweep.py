@@ -7,6 +7,7 @@ short case study (law (9), ``dt = 2 ms``, ``alpha = 400``: about 0.1 s each).
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import signal
@@ -24,17 +25,17 @@ import pytest
 from limits_check import assert_summary_within_limits, assert_within_limits
 
 import clik
-from clik import ScenarioError
+from clik import InputError, ScenarioError
 from clik.cli import main
-from clik.demo import scenario_path
 from clik.runner import build
+from clik.scenarios import scenario_path
 from clik.sweep import keypath, load_sweep, read_results, run_id, run_sweep
+from clik.sweep.progress import RunProgress
 from clik.sweep.spec import tomllib
 from clik.sweep.store import ResultStore, SweepOutputExistsError, read_manifest
 from clik.sweep.worker import TRACE_ENV, robot_loads, run_one
 
 distributed = pytest.importorskip("distributed", reason="pip install 'dask[distributed]'")
-pytest.importorskip("pyarrow", reason="pip install pyarrow")
 
 PYTHON = sys.executable
 CLIK = [PYTHON, "-m", "clik.cli"]
@@ -462,6 +463,17 @@ def test_store_parquet_is_a_dataset_folder_and_survives_an_interrupted_compactio
     assert pq.read_table(out / "results.parquet").num_rows == 3
 
 
+def test_store_format_auto_is_parquet(tmp_path):
+    out = tmp_path / "out"
+    values = {"a.b": [[0.0, 1.0]], "c": ["x"]}
+    store = ResultStore.open(out, _manifest(), values)
+    assert store.fmt == "parquet" and store.path == out / "results.parquet"
+    assert read_manifest(out)["format"] == "parquet" and not (out / "results.csv").exists()
+    with pytest.raises(InputError, match="format: expected 'auto', 'parquet' or 'csv'"):
+        ResultStore.open(tmp_path / "other", _manifest(), values, fmt="xlsx")
+    assert not (tmp_path / "other").exists()
+
+
 def test_store_csv_cuts_a_partial_last_line(tmp_path):
     out = tmp_path / "out"
     values = {"a.b": [[0.0, 1.0]], "c": ["x"]}
@@ -490,6 +502,63 @@ def test_cli_names_the_bad_key_path(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f'{path}: vary."solver.gian": unknown key path; valid key paths' in err
     assert not (tmp_path / "out").exists()
+
+
+# -- the progress bar ------------------------------------------------------------------------
+
+
+class Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_bar_shows_counts_failures_rate_and_notes():
+    stream = Terminal()
+    bar = RunProgress("sweep", 3, stream=stream, interval=0.0)
+    assert bar.enabled  # a terminal: drawn by default
+    bar.update()
+    bar.update(1, failed=1)
+    bar.note("stopping: finishing the runs submitted")
+    bar.update()
+    bar.close()
+    assert (bar.done, bar.failed) == (3, 1)
+    text = stream.getvalue()
+    # The note replaces the bar's line (cleared), then the bar is drawn again below it.
+    before, note, after = text.partition("\rsweep: stopping: finishing the runs submitted\n")
+    assert note and before.rstrip(" ").endswith("\r") and after.startswith("\rsweep:  67%")
+    last = text.rstrip("\n").rsplit("\r", 1)[-1]
+    assert last.startswith("sweep: 100%") and "3/3 [" in last
+    assert "runs/s, 1 failed]" in last
+    assert text.endswith("\n")
+    assert "sweep: 100%" in bar.line() and "3/3" in bar.line() and "1 failed" in bar.line()
+
+
+def test_progress_bar_counts_points_and_ends_its_line_when_interrupted():
+    stream = Terminal()
+    bar = RunProgress(
+        "reach", 128, stream=stream, interval=0.0, unit="points", failed_label="unreachable"
+    )
+    bar.update(64, failed=10)
+    bar.close()  # stopped before the total
+    last = stream.getvalue().rstrip("\n").rsplit("\r", 1)[-1]
+    assert last.startswith("reach:  50%") and "64/128 [" in last
+    assert "points/s, 10 unreachable]" in last
+    assert stream.getvalue().endswith("\n")
+
+
+def test_progress_bar_is_silent_off_a_terminal_or_when_disabled():
+    for bar in (
+        RunProgress("sweep", 2, stream=io.StringIO()),  # not a terminal
+        RunProgress("sweep", 2, enabled=False, stream=Terminal()),  # --quiet
+    ):
+        assert not bar.enabled
+        bar.update(1, failed=1)
+        bar.note("stopping")
+        bar.update(1)
+        bar.close()
+        assert (bar.done, bar.failed) == (2, 1)  # still counted
+        assert bar.stream.getvalue() == ""
+        assert "2/2" in bar.line() and "1 failed" in bar.line()
 
 
 # -- a local cluster in this process ----------------------------------------------------------
@@ -538,6 +607,17 @@ def test_local_cluster_sweep_with_trajectories_errors_and_csv(tmp_path, local_cl
     again = run_sweep(path, out, client=local_client)
     assert again.skipped == 4 and again.computed == 0
     assert again.all_statuses == statuses and again.failed == 2  # read back from the CSV
+
+
+def test_sweep_progress_bar_goes_to_stderr(tmp_path, short_sweep, local_client, capsys):
+    report = run_sweep(short_sweep(2, 1), tmp_path / "out", client=local_client, progress=True)
+    assert report.computed == 2
+    printed = capsys.readouterr()
+    last = printed.err.rstrip("\n").rsplit("\r", 1)[-1]
+    assert last.startswith("sweep: 100%") and "2/2 [" in last and "0 failed]" in last
+    assert printed.out == ""
+    again = run_sweep(short_sweep(2, 2), tmp_path / "quiet", client=local_client)
+    assert again.computed == 4 and capsys.readouterr().err == ""  # not a terminal: no bar
 
 
 def test_workers_load_the_robot_once(tmp_path, short_sweep, local_client):

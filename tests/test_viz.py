@@ -24,14 +24,13 @@ import umsgpack
 from limits_check import assert_within_limits
 
 import clik
-from clik.cli import write_outputs
 from clik.constraints.constraint_set import ConstraintSet
 from clik.constraints.obstacle import Obstacle
-from clik.demo import scenario_path
 from clik.errors import InputError
-from clik.result import TrackingResult
+from clik.result import TrackingResult, write_outputs
 from clik.robot import PANDA_FINGERS
 from clik.runner import build
+from clik.scenarios import scenario_path
 from clik.trajectory import Circle
 from clik.viz import build_scene, export_html, live, show, show_path, stop_server
 from clik.viz.server import LOOPBACK, MeshcatServer

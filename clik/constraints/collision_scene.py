@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import coal
 import numpy as np
@@ -27,6 +28,9 @@ import pinocchio as pin
 
 from clik.constraints.obstacle import Obstacle, convex_hull
 from clik.errors import GeometryError, InputError
+
+if TYPE_CHECKING:
+    from clik.robot import Robot
 
 GJK_TOLERANCE = 1e-9
 """Tolerance of coal's GJK/EPA for link-obstacle and link-link distances [m]."""
@@ -61,18 +65,42 @@ class CollisionScene:
 
     def __init__(
         self,
-        robot: object,
+        robot: Robot,
         obstacles: Sequence[Obstacle] = (),
         links: Sequence[str] | None = None,
         self_collision: bool = False,
         self_margin: float = 0.0,
     ) -> None:
-        model = robot.model  # type: ignore[attr-defined]
-        source = robot.collision_model  # type: ignore[attr-defined]
         self.robot = robot
-        self.model = model
+        self.model = robot.model
         gmodel = pin.GeometryModel()
-        frame_names = [f.name for f in model.frames]
+        self._add_links(gmodel, links)
+        self._warn_links_without_geometry()
+        if self.n_links == 0 and obstacles:
+            raise GeometryError(
+                f"robot {robot.name}: no link has collision geometry "
+                f"{'among ' + str(list(links)) + ' ' if links is not None else ''}"
+                "to keep away from the obstacles; remove the obstacles or use a URDF "
+                "with <collision> elements"
+            )
+        self._bounding_spheres()
+        self._add_obstacles(gmodel, obstacles)
+        self.self_pairs: list[tuple[int, int, int]] = []
+        if self_collision:
+            self._add_self_pairs(gmodel, robot, self_margin)
+        self.gmodel = gmodel
+        self.gdata = pin.GeometryData(gmodel)
+        for request in self.gdata.distanceRequests:
+            # GJK's default 1e-6 m tolerance makes hull-hull witness points jitter by that
+            # much between samples; rows are derivatives, so ask for 1e-9 m.
+            request.gjk_tolerance = GJK_TOLERANCE
+            request.epa_tolerance = GJK_TOLERANCE
+        self._joint_pos = np.zeros((len(self.joints), 3))
+
+    def _add_links(self, gmodel: pin.GeometryModel, links: Sequence[str] | None) -> None:
+        """Each link collision geometry as a convex shape on its joint (a bad one is skipped)."""
+        frame_names = [f.name for f in self.model.frames]
+        source = self.robot.collision_model
         known = sorted({frame_names[g.parentFrame] for g in source.geometryObjects})
         if links is not None:
             bad = [name for name in links if name not in known]
@@ -84,8 +112,7 @@ class CollisionScene:
                 )
         self.link_names: list[str] = []
         self.skipped_geometries: list[str] = []
-        link_joint = []
-        local_radius = []
+        link_joint, local_radius = [], []
         for go in source.geometryObjects:
             link = frame_names[go.parentFrame]
             if links is not None and link not in links:
@@ -97,57 +124,51 @@ class CollisionScene:
                 warnings.warn(
                     f"{exc}; this geometry is not checked against obstacles",
                     SkippedGeometryWarning,
-                    stacklevel=3,
+                    stacklevel=4,
                 )
                 continue
-            obj = pin.GeometryObject(
-                go.name, go.parentJoint, go.parentFrame, go.placement, geometry
+            gmodel.addGeometryObject(
+                pin.GeometryObject(go.name, go.parentJoint, go.parentFrame, go.placement, geometry)
             )
-            gmodel.addGeometryObject(obj)
             self.link_names.append(link)
             link_joint.append(go.parentJoint)
             local_radius.append(float(np.linalg.norm(go.placement.translation)) + radius)
-        # Bodies (joints) drawn but with no collision geometry at all: reported once.
-        visual = robot.visual_model  # type: ignore[attr-defined]
-        checked = {g.parentJoint for g in source.geometryObjects}
-        missing = sorted(
+        self.n_links = len(self.link_names)
+        self.local_radius = np.asarray(local_radius, dtype=float)
+        self.link_joint = np.asarray(link_joint, dtype=np.intp)
+
+    def _warn_links_without_geometry(self) -> None:
+        """Bodies drawn (visual geometry) with no collision geometry at all: reported once."""
+        frame_names = [f.name for f in self.model.frames]
+        checked = {g.parentJoint for g in self.robot.collision_model.geometryObjects}
+        self.links_without_geometry = sorted(
             {
                 frame_names[g.parentFrame]
-                for g in visual.geometryObjects
+                for g in self.robot.visual_model.geometryObjects
                 if g.parentJoint > 0 and g.parentJoint not in checked
             }
         )
-        self.links_without_geometry = missing
-        if missing:
+        if self.links_without_geometry:
             warnings.warn(
                 "links with visual but no collision geometry (not checked against obstacles): "
-                + ", ".join(missing),
+                + ", ".join(self.links_without_geometry),
                 NoCollisionGeometryWarning,
-                stacklevel=3,
+                stacklevel=4,
             )
-        self.n_links = len(self.link_names)
-        if self.n_links == 0 and obstacles:
-            raise GeometryError(
-                f"robot {getattr(robot, 'name', '?')}: no link has collision geometry "
-                f"{'among ' + str(list(links)) + ' ' if links is not None else ''}"
-                "to keep away from the obstacles; remove the obstacles or use a URDF "
-                "with <collision> elements"
-            )
-        self.local_radius = np.asarray(local_radius)
-        self.link_joint = np.asarray(link_joint, dtype=np.intp)
-        # One bounding sphere per joint, about the joint origin, enclosing its geometries.
+
+    def _bounding_spheres(self) -> None:
+        """One bounding sphere per joint, about the joint origin, enclosing its geometries."""
         self.joints = [int(j) for j in np.unique(self.link_joint)]
         self.joint_radius = np.array(
-            [
-                max(r for r, j in zip(local_radius, link_joint, strict=True) if j == jj)
-                for jj in self.joints
-            ]
+            [float(self.local_radius[self.link_joint == j].max()) for j in self.joints]
         )
-        self._joint_slot = {int(j): i for i, j in enumerate(self.joints)}
+        self._joint_slot = {j: i for i, j in enumerate(self.joints)}
         self.link_slot = np.array(
             [self._joint_slot[int(j)] for j in self.link_joint], dtype=np.intp
         )
 
+    def _add_obstacles(self, gmodel: pin.GeometryModel, obstacles: Sequence[Obstacle]) -> None:
+        """Obstacles as geometries on the world, and one pair per (link, obstacle)."""
         self.obstacles = list(obstacles)
         self.obstacle_geom = []
         for ob in self.obstacles:
@@ -158,26 +179,15 @@ class CollisionScene:
             for o, g in enumerate(self.obstacle_geom):
                 self.obstacle_pairs[i, o] = len(gmodel.collisionPairs)
                 gmodel.addCollisionPair(pin.CollisionPair(i, g))
-        self.self_pairs: list[tuple[int, int, int]] = []
-        if self_collision:
-            self._add_self_pairs(gmodel, robot, self_margin)
-        self.gmodel = gmodel
-        self.gdata = pin.GeometryData(gmodel)
         self._moving = [o for o, ob in enumerate(self.obstacles) if ob.moving]
-        for request in self.gdata.distanceRequests:
-            # GJK's default 1e-6 m tolerance makes hull-hull witness points jitter by that
-            # much between samples; rows are derivatives, so ask for 1e-9 m.
-            request.gjk_tolerance = GJK_TOLERANCE
-            request.epa_tolerance = GJK_TOLERANCE
-        self._joint_pos = np.zeros((len(self.joints), 3))
 
-    def _add_self_pairs(self, gmodel: pin.GeometryModel, robot: object, margin: float) -> None:
+    def _add_self_pairs(self, gmodel: pin.GeometryModel, robot: Robot, margin: float) -> None:
         """Link-link pairs, excluding adjacent links and pairs in contact at the reference."""
         model = self.model
         parents = model.parents
         data = model.createData()
         gdata = pin.GeometryData(gmodel)
-        pin.framesForwardKinematics(model, data, robot.q_reference)  # type: ignore[attr-defined]
+        pin.framesForwardKinematics(model, data, robot.q_reference)
         pin.updateGeometryPlacements(model, data, gmodel, gdata)
         for a in range(self.n_links):
             for b in range(a + 1, self.n_links):

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from clik.constraints.obstacle_rows import obstacle_row, point_jacobian
+from clik.constraints.obstacle_rows import obstacle_error, obstacle_row, point_jacobian
 from clik.extended_task import ExtendedTask
 
 if TYPE_CHECKING:
@@ -120,7 +120,7 @@ class ConstraintRun:
         self.alpha = alpha
         self.limit = cset.row_limit(m, law)
         self.t = t
-        nv = self.robot.nv  # type: ignore[attr-defined]
+        nv = self.robot.nv
         self._qdot = np.zeros(nv)
         self.active: list[Candidate] = []
         self._skipped: set[str] = set()
@@ -228,7 +228,7 @@ class ConstraintRun:
         if self._q_prev is None:
             self._dq_abs = None
         else:  # |dq| since the last sample, for the joint and obstacle certificates
-            dq = pin.difference(self.robot.model, self._q_prev, q)  # type: ignore[attr-defined]
+            dq = pin.difference(self.robot.model, self._q_prev, q)
             self._dq_abs = np.abs(dq, out=dq)
         if self.cset.joint_limits is not None:
             self._evaluate_joints(q, out, active)
@@ -284,7 +284,7 @@ class ConstraintRun:
                 lb -= self._obs_step
         evaluated[:] = False
         near = np.less(lb, cset.thr_matrix, out=self._near)
-        todo = np.argwhere(near).tolist() if near.any() else []
+        todo: list[Any] = np.argwhere(near).tolist() if near.any() else []
         todo += [c.pair for c in self.active if c.kind == "obstacle"]
         margin_o = self._everywhere if exact else cset.margin
         obs_index = self._obs_index
@@ -294,7 +294,7 @@ class ConstraintRun:
                 if evaluated[i, o]:
                     continue
                 if not placed:
-                    scene.place_geometries(self.robot.data, tk)  # type: ignore[attr-defined]
+                    scene.place_geometries(self.robot.data, tk)
                     placed = True
                 c = self._obstacle_candidate(int(i), int(o))
                 lb[i, o] = c.distance
@@ -313,10 +313,10 @@ class ConstraintRun:
         exact_d = np.where(self.exact_o, dist_o, np.inf)
         self.min_distance = float(exact_d.min())
         better = exact_d < self.run_min
-        for o in np.flatnonzero(better):
-            self.run_min[o] = exact_d[o]
-            self.run_min_t[o] = tk
-            self.run_min_link[o] = cset.link_labels[nearest[o]]
+        for j in np.flatnonzero(better):
+            self.run_min[j] = exact_d[j]
+            self.run_min_t[j] = tk
+            self.run_min_link[j] = cset.link_labels[nearest[j]]
 
     def _obstacle_candidate(self, i: int, o: int) -> Candidate:
         """Distance, witness points and error of link geometry ``i`` and obstacle ``o``."""
@@ -324,10 +324,7 @@ class ConstraintRun:
         assert scene is not None
         dist, p_link, p_obs, normal = scene.distance(int(scene.obstacle_pairs[i, o]))
         thr = float(cset.obs_threshold[o])
-        if cset.form == "normalized":
-            error, scale = thr - dist, thr
-        else:  # the paper's (13), with the distance's sign kept inside the obstacle
-            error, scale = 0.5 * (thr * thr - dist * abs(dist)), 0.5 * thr * thr
+        error, scale = obstacle_error(cset.form, thr, dist)
         c = Candidate(cset.pair_names[i][o], "obstacle", error, scale, thr)
         c.joint, c.distance, c.obstacle, c.pair = int(scene.link_joint[i]), dist, o, (i, o)
         c.point_a, c.point_b, c.normal = p_link, p_obs, normal
@@ -337,7 +334,7 @@ class ConstraintRun:
         """Link-link pairs whose bounding spheres are near, with coal."""
         cset, scene = self.cset, self.scene
         assert scene is not None
-        data = self.robot.data  # type: ignore[attr-defined]
+        data = self.robot.data
         pos, r = scene.place_joints(data), scene.joint_radius
         a, b = cset.self_slots
         gap = np.linalg.norm(pos[a] - pos[b], axis=1) - r[a] - r[b]
@@ -371,7 +368,7 @@ class ConstraintRun:
 
     def _fill_rows(self, ext: ExtendedTask) -> int:
         """Write the active constraints' rows (15), (19) into the extended task (24)-(25)."""
-        model, data = self.robot.model, self.robot.data  # type: ignore[attr-defined]
+        model, data = self.robot.model, self.robot.data
         cset, m = self.cset, self.m
         for s, c in enumerate(self.active):
             row = ext.J[m + s]

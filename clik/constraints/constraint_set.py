@@ -4,9 +4,9 @@ The augmented task (docs/method.md, eqs. (20)-(25)) stacks the task rows and
 the *active* constraint rows: ``J_e = (J; J_o; U)`` (24), ``e_e = (e; e_o; e_q)``
 (25). A :class:`ConstraintSet` holds what the constraints are (obstacles and
 their collision scene, thresholds, gains, the release rule, the bound on active
-rows); each run gets its own state from :meth:`ConstraintSet.start` (a
-:class:`~clik.constraints.constraint_run.ConstraintRun`), which fills rows into
-the run's extended task and never keeps a tracker, so one set can serve any
+rows). Each run builds its own state on it, a
+:class:`~clik.constraints.constraint_run.ConstraintRun`, which fills rows into
+the run's extended task and never keeps a tracker: one set can serve any
 number of trackers and runs.
 """
 
@@ -14,16 +14,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
 from clik.constraints.collision_scene import CollisionScene
-from clik.constraints.constraint_run import ConstraintRun
 from clik.constraints.joint_limits import JointLimits
 from clik.constraints.obstacle import Obstacle
 from clik.constraints.obstacle_rows import FORMS
 from clik.errors import InputError
+
+if TYPE_CHECKING:
+    from clik.robot import Robot
 
 RELEASE_RULES = ("projection", "sign")
 
@@ -64,7 +67,7 @@ class ConstraintSet:
 
     def __init__(
         self,
-        robot: object,
+        robot: Robot,
         *,
         obstacles: Sequence[Obstacle] = (),
         obstacle_rows: bool = True,
@@ -93,13 +96,13 @@ class ConstraintSet:
         ):
             if not (math.isfinite(value) and value > 0):
                 raise InputError(f"constraints.{field}", "a positive distance [m]", value)
-        for field, value in (
+        for field, gain in (
             ("obstacle_gain", obstacle_gain),
             ("joint_gain", joint_gain),
             ("self_gain", self_gain),
         ):
-            if value is not None and not (math.isfinite(value) and value > 0):
-                raise InputError(f"constraints.{field}", "a positive gain [1/s]", value)
+            if gain is not None and not (math.isfinite(gain) and gain > 0):
+                raise InputError(f"constraints.{field}", "a positive gain [1/s]", gain)
         if not (math.isfinite(hysteresis) and hysteresis >= 0):
             raise InputError("constraints.hysteresis", "a number >= 0", hysteresis)
         self.robot = robot
@@ -209,7 +212,7 @@ class ConstraintSet:
         Raises:
             InputError: No row can be active (``n - m <= 0`` under laws (9) and (8)).
         """
-        nv = self.robot.nv  # type: ignore[attr-defined]
+        nv = self.robot.nv
         free = nv if law == "pseudoinverse" else nv - m
         limit = free if self.max_active is None else min(int(self.max_active), free)
         rows_wanted = self.obstacle_rows or self.joint_limits is not None
@@ -221,15 +224,3 @@ class ConstraintSet:
                 "smaller task mask",
             )
         return limit
-
-    def start(self, m: int, law: str, alpha: float, t: np.ndarray, n_rec: int) -> ConstraintRun:
-        """The constraint state of a new run (nothing is shared with earlier runs).
-
-        Args:
-            m: Task rows.
-            law: The run's law.
-            alpha: The task's largest gain [1/s] (default row gains).
-            t: The run's time grid [s].
-            n_rec: Number of recorded samples.
-        """
-        return ConstraintRun(self, m, law, alpha, t, n_rec)

@@ -221,8 +221,11 @@ class JointLimits:
         return -float(self.evaluate(q).max())
 
     def row(self, i: int, out: np.ndarray) -> None:
-        """Row ``u_q`` (19) of candidate ``i`` into ``out`` (nv,): ``+1`` (lower) or
-        ``-1`` (upper) at the joint's velocity index, zeros elsewhere."""
+        """Row ``u_q`` (19) of candidate ``i`` into ``out`` (nv,).
+
+        ``+1`` (lower limit) or ``-1`` (upper limit) at the joint's velocity
+        index, zeros elsewhere.
+        """
         out[:] = 0.0
         out[self.v_index[i % self.n]] = self.sign[i]
 

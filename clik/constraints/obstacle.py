@@ -9,12 +9,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TypeVar
 
 import coal
 import numpy as np
 import pinocchio as pin
 
 from clik.errors import GeometryError, InputError, native_message
+
+T = TypeVar("T")
 
 SHAPES = ("sphere", "box", "capsule", "cylinder", "mesh")
 
@@ -139,7 +142,8 @@ class Obstacle:
         return f"Obstacle({self.name!r}, {self.shape!r}, position={self.position.tolist()})"
 
 
-def _required(value: object, where: str, key: str) -> object:
+def _required(value: T | None, where: str, key: str) -> T:
+    """``value``, refused when the shape needs it and it is missing."""
     if value is None:
         raise InputError(f"{where}.{key}", f"a value for this shape ({key})")
     return value

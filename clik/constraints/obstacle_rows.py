@@ -56,7 +56,8 @@ def obstacle_row(
         form: ``"normalized"`` or ``"squared"``.
         threshold: ``d_o`` [m].
         distance: Signed link-obstacle distance [m] (negative in penetration).
-        p_link, p_obstacle: Witness points on the link and on the obstacle [m].
+        p_link: Witness point on the link [m].
+        p_obstacle: Witness point on the obstacle [m].
         normal: coal's unit normal from the link toward the obstacle.
         J_point: Linear Jacobian of ``p_link`` (3, nv).
         obstacle_velocity: ``cdot`` [m/s].
@@ -68,12 +69,28 @@ def obstacle_row(
         n = d / norm
     else:  # contact or penetration: push out along the contact normal
         n = -np.asarray(normal, dtype=float)
-    if form == "normalized":
-        n.dot(J_point, out=out)
-        return threshold - distance, float(n.dot(obstacle_velocity))
-    # squared form with the distance's sign kept, e_o = 1/2 (d_o^2 - s |s|), s the signed
-    # distance: (13) outside the obstacle, still monotonic inside it.
-    scale = abs(distance)
+    error, _ = obstacle_error(form, threshold, distance)
     np.dot(n, J_point, out=out)
+    if form == "normalized":
+        return error, float(n.dot(obstacle_velocity))
+    scale = abs(distance)  # d(|d|^2 / 2) = |d| n^T dd (15); feed-forward |d| n^T cdot (14)
     out *= scale
-    return 0.5 * (threshold**2 - distance * scale), scale * float(n @ obstacle_velocity)
+    return error, scale * float(n @ obstacle_velocity)
+
+
+def obstacle_error(form: str, threshold: float, distance: float) -> tuple[float, float]:
+    """Error ``e_o`` of a link at signed ``distance`` [m] from an obstacle, and its scale.
+
+    ``"normalized"``: ``e_o = d_o - s`` [m], scale ``d_o``. ``"squared"``, the
+    paper's (13) with the sign of the signed distance ``s`` kept so that it stays
+    monotonic inside the obstacle: ``e_o = 1/2 (d_o^2 - s |s|)`` [m^2], scale
+    ``d_o^2 / 2``. The scale makes errors of both forms comparable (hysteresis).
+
+    Args:
+        form: ``"normalized"`` or ``"squared"``.
+        threshold: ``d_o`` [m].
+        distance: Signed link-obstacle distance ``s`` [m] (negative in penetration).
+    """
+    if form == "normalized":
+        return threshold - distance, threshold
+    return 0.5 * (threshold * threshold - distance * abs(distance)), 0.5 * threshold * threshold

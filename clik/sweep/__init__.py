@@ -8,14 +8,15 @@ written as runs finish (:mod:`clik.sweep.store`); rerunning a sweep into the
 same folder computes only the runs missing there.
 
 A *reachability map* (:mod:`clik.sweep.reach`) solves single-pose IK
-(:func:`clik.solve`) over a grid of target points and writes success,
-iterations and manipulability ``sqrt(det(J J^T))`` per point, as a table and
-as a self-contained HTML view.
+(:func:`clik.solve`) over a grid of target points: success, iterations and
+manipulability ``sqrt(det(J J^T))`` per point (:mod:`clik.sweep.reach_data`),
+written as a table and as a self-contained HTML view
+(:mod:`clik.sweep.reach_output`, :mod:`clik.sweep.reach_view`).
 """
 
-from clik.sweep.bench import sweep_rate
 from clik.sweep.execute import SweepReport, dask_client, run_sweep
-from clik.sweep.reach import ReachMap, ReachSpec, reach_map
+from clik.sweep.reach import reach_map
+from clik.sweep.reach_data import ReachMap, ReachSpec
 from clik.sweep.spec import RunSpec, Sweep, Vary, load_sweep, parse_sweep, run_id
 from clik.sweep.store import ResultStore, SweepOutputExistsError, read_results
 
@@ -35,5 +36,4 @@ __all__ = [
     "read_results",
     "run_id",
     "run_sweep",
-    "sweep_rate",
 ]

@@ -228,7 +228,8 @@ def run_sweep(
         client: An existing :class:`distributed.Client` instead of both.
         keep_trajectories: Also write ``DIR/runs/<run_id>/`` (summary, trajectory).
         force: Start over in a folder holding something else.
-        fmt: ``"auto"`` (Parquet where pyarrow is installed), ``"parquet"`` or ``"csv"``.
+        fmt: ``"auto"`` or ``"parquet"`` (Parquet), or ``"csv"``; a resumed folder keeps
+            its format.
         progress: Draw the progress bar (default: when stderr is a terminal).
         on_row: Called with each row after it is buffered (tests, notebooks).
 
@@ -269,7 +270,7 @@ def run_sweep(
         if store is None:
             store = open_store()
         report.results = store.path
-        _execute(dask, sweep, todo, store, report, bar, keep_trajectories, on_row)
+        _Session(dask, sweep, todo, store, report, bar, keep_trajectories, on_row).run()
     if report.complete:
         store.compact()
     report.all_statuses = read_statuses(out)
@@ -285,107 +286,132 @@ def _window(client: Client) -> int:
     return 2 * max(threads, 1)  # one running and one queued per thread: a short Ctrl-C drain
 
 
-def _execute(
-    client: Client,
-    sweep: Sweep,
-    todo: list[RunSpec],
-    store: ResultStore,
-    report: SweepReport,
-    bar: RunProgress,
-    keep_trajectories: bool,
-    on_row: Callable[[dict[str, Any]], None] | None,
-) -> None:
-    from distributed import as_completed
+class _Session:
+    """One session of a sweep on a client: the runs to do, submitted a window at a time.
 
-    by_key: dict[str, RunSpec] = {}
-    base_file = str(sweep.base_file.resolve())
-    queue = iter(todo)
+    Each finished run is taken once (:meth:`take`), buffered and written in
+    batches (:meth:`flush`); the first Ctrl-C stops the submissions
+    (:meth:`on_sigint`), a second one stops at once.
+    """
 
-    def submit() -> Any:
-        run = next(queue, None)
+    def __init__(
+        self,
+        client: Client,
+        sweep: Sweep,
+        todo: list[RunSpec],
+        store: ResultStore,
+        report: SweepReport,
+        bar: RunProgress,
+        keep_trajectories: bool,
+        on_row: Callable[[dict[str, Any]], None] | None,
+    ) -> None:
+        self.client = client
+        self.sweep = sweep
+        self.store = store
+        self.report = report
+        self.bar = bar
+        self.keep_trajectories = keep_trajectories
+        self.on_row = on_row
+        self.queue = iter(todo)
+        self.base_file = str(sweep.base_file.resolve())
+        self.by_key: dict[str, RunSpec] = {}
+        self.buffer: list[dict[str, Any]] = []
+        self.taken: set[str] = set()
+        self.last_flush = time.perf_counter()
+        self.stopping = threading.Event()
+
+    def submit(self) -> Any:
+        """Submit the next run as a Dask task; its future, or None when none is left."""
+        run = next(self.queue, None)
         if run is None:
             return None
-        key = f"clik-run-{sweep.fingerprint}-{run.run_id}"
-        by_key[key] = run
-        return client.submit(
+        key = f"clik-run-{self.sweep.fingerprint}-{run.run_id}"
+        self.by_key[key] = run
+        return self.client.submit(
             run_one,
-            sweep.base_data,
-            base_file,
+            self.sweep.base_data,
+            self.base_file,
             run.run_id,
             run.params,
-            keep_trajectories,
+            self.keep_trajectories,
             key=key,
             pure=False,
             retries=0,
         )
 
-    buffer: list[dict[str, Any]] = []
-    taken: set[str] = set()
-    last_flush = time.perf_counter()
+    def flush(self) -> None:
+        """Write the buffered rows (those of run ids not in the folder yet)."""
+        self.report.computed += self.store.append(self.buffer)
+        self.buffer.clear()
+        self.last_flush = time.perf_counter()
 
-    def flush() -> None:
-        nonlocal last_flush
-        report.computed += store.append(buffer)
-        buffer.clear()
-        last_flush = time.perf_counter()
-
-    def take(future: Any) -> None:
-        run = by_key.pop(future.key, None)
-        if run is None or run.run_id in taken or run.run_id in store.ids:
-            return  # exactly once per id, whatever the cluster did
+    def take(self, future: Any) -> None:
+        """Buffer a finished run's row, once per run id whatever the cluster did."""
+        run = self.by_key.pop(future.key, None)
+        if run is None or run.run_id in self.taken or run.run_id in self.store.ids:
+            return
         row = _row(future, run)
         if row is None:
-            report.lost += 1
+            self.report.lost += 1
             return
         summary, trajectory = row.pop("_summary", None), row.pop("_trajectory_npz", None)
         if summary is not None and trajectory is not None:
-            store.write_run_files(run.run_id, summary, trajectory)
-        taken.add(run.run_id)
-        buffer.append(row)
-        report.statuses[row["status"]] += 1
-        bar.update(1, failed=int(row["status"] == RAISED))
-        if on_row is not None:
-            on_row(row)
+            self.store.write_run_files(run.run_id, summary, trajectory)
+        self.taken.add(run.run_id)
+        self.buffer.append(row)
+        self.report.statuses[row["status"]] += 1
+        self.bar.update(1, failed=int(row["status"] == RAISED))
+        if self.on_row is not None:
+            self.on_row(row)
 
-    start = time.perf_counter()
-    stopping = threading.Event()
-
-    def on_sigint(signum: int, frame: Any) -> None:
-        if stopping.is_set():  # a second Ctrl-C: stop now
+    def on_sigint(self, signum: int, frame: Any) -> None:
+        """The first Ctrl-C: stop submitting; a second one: stop now."""
+        if self.stopping.is_set():
             raise KeyboardInterrupt
-        stopping.set()
-        bar.note("stopping: finishing the runs submitted (Ctrl-C again to stop now)")
+        self.stopping.set()
+        self.bar.note("stopping: finishing the runs submitted (Ctrl-C again to stop now)")
 
-    # The first Ctrl-C only sets a flag: the loop stops submitting, and every run already
-    # submitted (at most two per worker thread) is finished and written, so none is
-    # computed and then lost (and computed again on resume).
-    main = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGINT, on_sigint) if main else None
-    first = [f for f in (submit() for _ in range(_window(client))) if f is not None]
-    pending = as_completed(first, loop=client.loop)
-    try:
-        for future in pending:
-            take(future)
-            if not stopping.is_set():
-                following = submit()
-                if following is not None:
-                    pending.add(following)
-            due = time.perf_counter() - last_flush >= FLUSH_SECONDS
-            if len(buffer) >= FLUSH_ROWS or (buffer and due):
-                flush()
-        if stopping.is_set():
-            report.interrupted = True
-            raise KeyboardInterrupt
-    except BaseException:
-        report.interrupted = True
-        client.cancel(list(pending.futures))
-        raise
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
-        flush()
-        report.wall_time_s = time.perf_counter() - start
-        bar.close()
+    def run(self) -> None:
+        """Compute the runs; Ctrl-C raises KeyboardInterrupt once the submitted ones are written.
+
+        The first Ctrl-C only sets a flag: no more runs are submitted, and every
+        run already submitted (at most two per worker thread) is finished and
+        written, so none is computed and then lost (and computed again on resume).
+        """
+        start = time.perf_counter()
+        main = threading.current_thread() is threading.main_thread()
+        previous = signal.signal(signal.SIGINT, self.on_sigint) if main else None
+        try:
+            self._drain()
+        finally:
+            if previous is not None:
+                signal.signal(signal.SIGINT, previous)
+            self.flush()
+            self.report.wall_time_s = time.perf_counter() - start
+            self.bar.close()
+
+    def _drain(self) -> None:
+        """Take finished runs and submit one more per run taken, until none is pending."""
+        from distributed import as_completed
+
+        first = [f for f in (self.submit() for _ in range(_window(self.client))) if f is not None]
+        pending = as_completed(first, loop=self.client.loop)
+        try:
+            for future in pending:
+                self.take(future)
+                if not self.stopping.is_set():
+                    following = self.submit()
+                    if following is not None:
+                        pending.add(following)
+                due = time.perf_counter() - self.last_flush >= FLUSH_SECONDS
+                if len(self.buffer) >= FLUSH_ROWS or (self.buffer and due):
+                    self.flush()
+            if self.stopping.is_set():
+                raise KeyboardInterrupt
+        except BaseException:
+            self.report.interrupted = True
+            self.client.cancel(list(pending.futures))
+            raise
 
 
 def _row(future: Any, run: RunSpec) -> dict[str, Any] | None:

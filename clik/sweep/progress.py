@@ -1,4 +1,7 @@
-"""A one-line progress bar for many runs: done, failed, rate, time left (stderr, terminal only)."""
+"""A progress bar for many runs (a :mod:`tqdm` bar): done, failed, rate, time left.
+
+Drawn on stderr, and by default only when stderr is a terminal.
+"""
 
 from __future__ import annotations
 
@@ -6,9 +9,16 @@ import sys
 import time
 from typing import TextIO
 
+from tqdm import tqdm
+
 
 class RunProgress:
-    """Counts finished runs and redraws one line on ``stream`` at most every ``interval`` s.
+    """Counts finished runs and shows them as a tqdm bar on ``stream``.
+
+    The bar shows ``label``, the share done, ``done/total``, the time spent and
+    left, the rate and how many failed, e.g.
+    ``sweep:  40%|####      | 4/10 [00:02<00:03, 1.95runs/s, 1 failed]``.
+    The counts are kept whether the bar is drawn or not.
 
     Args:
         label: Text before the bar.
@@ -36,11 +46,20 @@ class RunProgress:
         self.total = total
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = self.stream.isatty() if enabled is None else enabled
-        self.interval = interval
         self.done = 0
         self.failed = 0
         self.start = time.perf_counter()
-        self._drawn = 0.0
+        self._bar = tqdm(
+            total=total,
+            desc=label,
+            unit=unit,
+            file=self.stream,
+            disable=not self.enabled,
+            mininterval=interval,
+            dynamic_ncols=True,
+            leave=True,
+            postfix=self.postfix(),
+        )
 
     @property
     def rate(self) -> float:
@@ -48,43 +67,44 @@ class RunProgress:
         elapsed = time.perf_counter() - self.start
         return self.done / elapsed if elapsed > 0 else 0.0
 
+    def postfix(self) -> str:
+        """The failed count shown after the rate, e.g. ``1 failed``."""
+        return f"{self.failed} {self.failed_label}"
+
     def update(self, done: int = 1, failed: int = 0) -> None:
-        """Count ``done`` more runs, ``failed`` of which raised; redraw when due."""
+        """Count ``done`` more runs, ``failed`` of which failed; redraw when due."""
         self.done += done
         self.failed += failed
-        now = time.perf_counter()
-        if self.done >= self.total or now - self._drawn >= self.interval:
-            self._drawn = now
-            self.draw()
+        if not self.enabled:
+            return
+        self._bar.set_postfix_str(self.postfix(), refresh=False)
+        self._bar.update(done)
 
     def line(self) -> str:
-        """The text of the bar."""
-        width = 24
-        filled = int(width * self.done / max(self.total, 1))
-        rate = self.rate
-        left = (self.total - self.done) / rate if rate > 0 else float("nan")
-        eta = f", {left:.0f} s left" if rate > 0 and self.done < self.total else ""
-        return (
-            f"{self.label} [{'#' * filled}{'.' * (width - filled)}] {self.done}/{self.total} "
-            f"done, {self.failed} {self.failed_label}, {rate:.1f} {self.unit}/s{eta}"
+        """The text of the bar (as tqdm draws it, 80 columns wide)."""
+        return tqdm.format_meter(
+            self.done,
+            self.total,
+            time.perf_counter() - self.start,
+            ncols=80,
+            prefix=self.label,
+            unit=self.unit,
+            postfix=self.postfix(),
         )
 
     def draw(self) -> None:
-        """Redraw the line (a newline once everything is done)."""
-        if not self.enabled:
-            return
-        end = "\n" if self.done >= self.total else ""
-        self.stream.write(f"\r{self.line()}\x1b[K{end}")
-        self.stream.flush()
+        """Redraw the bar now."""
+        if self.enabled:
+            self._bar.refresh()
 
     def note(self, text: str) -> None:
-        """A line of its own under the bar (only where the bar is drawn)."""
+        """A line of its own above the bar (only where the bar is drawn).
+
+        Safe in a signal handler: tqdm's write lock is not taken.
+        """
         if self.enabled:
-            self.stream.write(f"\n{self.label}: {text}\n")
-            self.stream.flush()
+            self._bar.write(f"{self.label}: {text}", file=self.stream, nolock=True)
 
     def close(self) -> None:
-        """End the line if the bar stopped before the total (an interruption)."""
-        if self.enabled and self.done < self.total:
-            self.stream.write("\n")
-            self.stream.flush()
+        """Draw the last state and end the bar's line (also after an interruption)."""
+        self._bar.close()

@@ -1,4 +1,4 @@
-"""Reachability maps: single-pose IK over a grid of target points.
+r"""Reachability maps: single-pose IK over a grid of target points.
 
 For every point ``p`` of a box sampled every ``step`` metres, :func:`clik.solve`
 (law (10), damped, seeded restarts inside the joint limits) looks for ``q``
@@ -8,31 +8,32 @@ fixed orientation ``R`` (a pose task). Each point gets ``success``, the
 
 .. math::
 
-    w(q) = \\sqrt{\\det(J(q) J(q)^T)}
+    w(q) = \sqrt{\det(J(q) J(q)^T)}
 
 of the task Jacobian ``J`` (``LOCAL_WORLD_ALIGNED``, the task's rows) at the
 solution: zero at a singularity, larger where the frame moves freely. For a
 position task ``w`` is in [m^m]; mixed units for a pose task.
 
 Points are solved in chunks, as Dask tasks (the same local or remote cluster
-as :mod:`clik.sweep.execute`); a worker loads the robot once.
+as :mod:`clik.sweep.execute`); a worker loads the robot once. The spec and the
+map are in :mod:`clik.sweep.reach_data`; :func:`clik.sweep.reach_output.write_reach`
+writes a map's table, description and HTML view.
 """
 
 from __future__ import annotations
 
 import math
-import os
 import threading
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from clik.errors import InputError
-from clik.result import atomic_write, write_json
+from clik.sweep.execute import dask_client
+from clik.sweep.progress import RunProgress
+from clik.sweep.reach_data import COLUMNS, ReachMap, ReachSpec
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -40,78 +41,23 @@ if TYPE_CHECKING:
     from clik.robot import Robot
     from clik.task import Task
 
+__all__ = [
+    "CHUNK",
+    "MAX_POINTS",
+    "ReachMap",
+    "ReachSpec",
+    "check_spec",
+    "grid_points",
+    "manipulability",
+    "reach_map",
+    "solve_points",
+]
+
 MAX_POINTS = 2_000_000
 """Most points of one map (a guard against a typo in ``step``)."""
 
 CHUNK = 64
 """Points solved per Dask task."""
-
-COLUMNS = (
-    "x",
-    "y",
-    "z",
-    "success",
-    "iterations",
-    "attempts",
-    "position_error",
-    "orientation_error",
-    "manipulability",
-)
-"""Columns of the map's table (lengths [m], angles [rad])."""
-
-
-@dataclass(frozen=True)
-class ReachSpec:
-    """What a reachability map solves.
-
-    Attributes:
-        robot: Robot name or URDF path (:meth:`clik.Robot.load`).
-        frame: The frame to place.
-        box: ``(xmin, ymin, zmin, xmax, ymax, zmax)`` [m].
-        step: Grid spacing [m].
-        orientation_rpy: Fixed orientation as roll, pitch, yaw [rad] (a pose task), or
-            None (a position task).
-        lock: Joints locked at a value [rad or m].
-        axes: Task components kept (e.g. ``["x", "y"]`` for a planar arm), or None for all.
-        restarts: Random restarts of :func:`clik.solve` after a failed attempt.
-        tolerance: Position tolerance [m].
-        orientation_tolerance: Orientation tolerance [rad].
-        seed: Seed of the restarts (the same for every point).
-    """
-
-    robot: str
-    frame: str
-    box: tuple[float, float, float, float, float, float]
-    step: float
-    orientation_rpy: tuple[float, float, float] | None = None
-    lock: dict[str, float] = field(default_factory=dict)
-    axes: tuple[str, ...] | None = None
-    restarts: int = 20
-    tolerance: float = 1e-4
-    orientation_tolerance: float = 1e-3
-    seed: int = 0
-
-    @property
-    def kind(self) -> str:
-        """``"pose"`` with a fixed orientation, else ``"position"``."""
-        return "position" if self.orientation_rpy is None else "pose"
-
-    def as_dict(self) -> dict[str, Any]:
-        """JSON-ready description (written to ``DIR/reach.json``)."""
-        return {
-            "robot": self.robot,
-            "frame": self.frame,
-            "box": list(self.box),
-            "step": self.step,
-            "kind": self.kind,
-            "orientation_rpy": None if self.orientation_rpy is None else list(self.orientation_rpy),
-            "lock": dict(self.lock),
-            "axes": None if self.axes is None else list(self.axes),
-            "restarts": self.restarts,
-            "tolerance": self.tolerance,
-            "orientation_tolerance": self.orientation_tolerance,
-            "seed": self.seed,
-        }
 
 
 def grid_points(box: Sequence[float], step: float) -> np.ndarray:
@@ -156,7 +102,7 @@ def _robot_and_task(spec: ReachSpec) -> tuple[Robot, Task]:
     cached = getattr(_local, "reach", None)
     if cached is None or cached[0] != key:
         robot = Robot.load(spec.robot, lock=spec.lock or None)
-        task = Task(robot, spec.frame, spec.kind, list(spec.axes) if spec.axes else None)  # type: ignore[arg-type]
+        task = Task(robot, spec.frame, spec.kind, list(spec.axes) if spec.axes else None)
         cached = _local.reach = (key, robot, task)
     return cached[1], cached[2]
 
@@ -192,99 +138,6 @@ def solve_points(spec: ReachSpec, points: np.ndarray) -> dict[str, list[Any]]:
     return out
 
 
-@dataclass
-class ReachMap:
-    """A computed map.
-
-    Attributes:
-        spec: What was solved.
-        points: Target points (N, 3) [m].
-        success: Solved within tolerance (N,).
-        iterations: Solver iterations over all attempts (N,).
-        attempts: Attempts (1 + restarts used) (N,).
-        position_error: Final position error [m] (N,).
-        orientation_error: Final orientation error [rad] (N,).
-        manipulability: ``sqrt(det(J J^T))`` at the solution, NaN where not solved (N,).
-        wall_time_s: Time to solve the map [s].
-    """
-
-    spec: ReachSpec
-    points: np.ndarray
-    success: np.ndarray
-    iterations: np.ndarray
-    attempts: np.ndarray
-    position_error: np.ndarray
-    orientation_error: np.ndarray
-    manipulability: np.ndarray
-    wall_time_s: float = 0.0
-
-    @classmethod
-    def from_columns(
-        cls, spec: ReachSpec, columns: dict[str, list[Any]], wall_time_s: float = 0.0
-    ) -> ReachMap:
-        """A map from the columns :func:`solve_points` returns (or a table read back)."""
-        w = [math.nan if v is None else float(v) for v in columns["manipulability"]]
-        return cls(
-            spec,
-            np.column_stack([columns["x"], columns["y"], columns["z"]]).astype(float),
-            np.asarray(columns["success"], dtype=bool),
-            np.asarray(columns["iterations"], dtype=int),
-            np.asarray(columns["attempts"], dtype=int),
-            np.asarray(columns["position_error"], dtype=float),
-            np.asarray(columns["orientation_error"], dtype=float),
-            np.asarray(w, dtype=float),
-            wall_time_s,
-        )
-
-    @property
-    def reachable_fraction(self) -> float:
-        """Share of the points solved."""
-        return float(np.mean(self.success)) if len(self.success) else 0.0
-
-    def columns(self) -> dict[str, list[Any]]:
-        """The table's columns (manipulability None where not solved)."""
-        return {
-            "x": self.points[:, 0].tolist(),
-            "y": self.points[:, 1].tolist(),
-            "z": self.points[:, 2].tolist(),
-            "success": self.success.tolist(),
-            "iterations": self.iterations.tolist(),
-            "attempts": self.attempts.tolist(),
-            "position_error": self.position_error.tolist(),
-            "orientation_error": self.orientation_error.tolist(),
-            "manipulability": [None if math.isnan(v) else v for v in self.manipulability.tolist()],
-        }
-
-    def write_table(self, path: str | os.PathLike[str], fmt: str = "auto") -> Path:
-        """Write the map as Parquet (``.parquet``) or CSV, atomically; returns the path.
-
-        With ``fmt="auto"`` the suffix of ``path`` decides, and a ``.parquet`` path
-        becomes ``.csv`` where pyarrow is not installed.
-        """
-        from clik.sweep.store import have_pyarrow
-
-        path = Path(path)
-        if fmt == "auto":
-            fmt = "parquet" if path.suffix == ".parquet" and have_pyarrow() else "csv"
-        if fmt == "parquet":
-            import pyarrow as pa
-            import pyarrow.parquet as pq
-
-            table = pa.table(self.columns())
-            atomic_write(path, lambda f: pq.write_table(table, f))
-            return path
-        path = path.with_suffix(".csv")
-        cols = self.columns()
-
-        def text(v: Any) -> str:
-            return "" if v is None else repr(v) if isinstance(v, float) else str(v)
-
-        lines = [",".join(COLUMNS)]
-        lines += [",".join(text(cols[c][i]) for c in COLUMNS) for i in range(len(self.points))]
-        atomic_write(path, lambda f: f.write("\n".join(lines) + "\n"), mode="w")
-        return path
-
-
 def check_spec(spec: ReachSpec) -> np.ndarray:
     """Validate a spec here, before any task is sent; returns its grid points (N, 3).
 
@@ -318,27 +171,27 @@ def reach_map(
         InputError, RobotLoadError, FrameNotFound, JointNotFound: see :func:`check_spec`.
     """
     points = check_spec(spec)
-    from clik.sweep.execute import dask_client
-    from clik.sweep.progress import RunProgress
-
     chunks = [points[i : i + CHUNK] for i in range(0, len(points), CHUNK)]
     bar = RunProgress(
         "reach", len(points), enabled=progress, unit="points", failed_label="unreachable"
     )
     start = time.perf_counter()
-    if client is not None:
-        parts = _solve_chunks(client, spec, chunks, bar)
-    else:
-        with dask_client(workers, scheduler) as own:
-            parts = _solve_chunks(own, spec, chunks, bar)
-    bar.close()
+    try:
+        if client is not None:
+            parts = _solve_chunks(client, spec, chunks, bar)
+        else:
+            with dask_client(workers, scheduler) as own:
+                parts = _solve_chunks(own, spec, chunks, bar)
+    finally:
+        bar.close()
     columns = {c: [v for part in parts for v in part[c]] for c in COLUMNS}
     return ReachMap.from_columns(spec, columns, time.perf_counter() - start)
 
 
 def _solve_chunks(
-    client: Client, spec: ReachSpec, chunks: list[np.ndarray], bar: Any
+    client: Client, spec: ReachSpec, chunks: list[np.ndarray], bar: RunProgress
 ) -> list[dict[str, list[Any]]]:
+    """Solve the chunks as Dask tasks; their columns in chunk order (Ctrl-C cancels them)."""
     from distributed import as_completed
 
     futures = [client.submit(solve_points, spec, chunk, pure=False) for chunk in chunks]
@@ -353,23 +206,3 @@ def _solve_chunks(
         client.cancel(futures)
         raise
     return [p for p in parts if p is not None]
-
-
-def write_reach(reach: ReachMap, out: Path, html: bool = True) -> dict[str, Path]:
-    """Write ``reach.parquet`` (or ``.csv``), ``reach.json`` and ``reach.html`` into ``out``."""
-    written = {"table": reach.write_table(out / "reach.parquet")}
-    info = {
-        **reach.spec.as_dict(),
-        "points": len(reach.points),
-        "reachable": int(reach.success.sum()),
-        "reachable_fraction": reach.reachable_fraction,
-        "wall_time_s": reach.wall_time_s,
-        "table": written["table"].name,
-    }
-    write_json(out / "reach.json", info)
-    written["json"] = out / "reach.json"
-    if html:
-        from clik.sweep.reach_view import export_reach_html
-
-        written["html"] = export_reach_html(reach, out / "reach.html")
-    return written

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clik.result import atomic_write
+from clik.io import atomic_write
 from clik.viz import palette
 from clik.viz.camera import default_view, is_planar
 from clik.viz.commands import (
@@ -35,7 +35,7 @@ from clik.viz.timeline import frame_origins, joint_placements
 
 if TYPE_CHECKING:
     from clik.robot import Robot
-    from clik.sweep.reach import ReachMap
+    from clik.sweep.reach_data import ReachMap
 
 ROOT = "/meshcat/reach"
 """Scene path of the map's points and box."""

@@ -49,7 +49,7 @@ import numpy as np
 from clik.errors import ScenarioError
 from clik.scenario import Scenario, parse_scenario
 from clik.schema import Table
-from clik.sweep import keypath
+from clik.sweep.keypath import KeyPathError, from_scenario_key, leaves, split, substitute
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -128,7 +128,7 @@ class Sweep:
 
     def scenario_data(self, run: RunSpec) -> dict[str, Any]:
         """The run's scenario as a TOML dict (base with the parameters substituted)."""
-        return keypath.substitute(self.base_data, run.params)
+        return substitute(self.base_data, run.params)
 
     def scenario(self, run: RunSpec) -> Scenario:
         """The run's validated scenario."""
@@ -166,7 +166,7 @@ def _read_toml(path: Path) -> dict[str, Any]:
 
 def resolve_base(file: Path, base: str) -> Path:
     """The base scenario file: relative to the sweep file's folder, else a shipped scenario."""
-    from clik.demo import scenario_path
+    from clik.scenarios import scenario_path
 
     candidate = Path(base).expanduser()
     if not candidate.is_absolute():
@@ -327,19 +327,19 @@ def _uniform(table: Table, rng: np.random.Generator) -> list[Any]:
 def _check_path(file: Path, base_file: Path, base: dict[str, Any], vary: Vary) -> None:
     """A key path must address a base key, or a key the scenario format accepts."""
     where = f'vary."{vary.path}"'
-    valid = keypath.leaves(base)
+    valid = leaves(base)
     listing = f"valid key paths of {base_file.name}: {', '.join(valid)}"
     try:
-        keypath.split(vary.path)
+        split(vary.path)
         if vary.path in valid:
             return
-        data = keypath.substitute(base, {vary.path: vary.values[0]})
-    except keypath.KeyPathError as exc:
+        data = substitute(base, {vary.path: vary.values[0]})
+    except KeyPathError as exc:
         raise ScenarioError(file, where, f"{exc.problem}; {listing}") from None
     try:
         parse_scenario(data, base_file)
     except ScenarioError as exc:
-        key = keypath.from_scenario_key(data, exc.key)
+        key = from_scenario_key(data, exc.key)
         if "unknown key" in exc.expected and (key == vary.path or vary.path.startswith(f"{key}.")):
             raise ScenarioError(
                 file, where, f"unknown key path; {listing} (or another scenario key)"
@@ -349,12 +349,12 @@ def _check_path(file: Path, base_file: Path, base: dict[str, Any], vary: Vary) -
 def _check_run(file: Path, base_file: Path, base: dict[str, Any], run: RunSpec) -> None:
     """Validate one run's scenario; an error names the vary table responsible."""
     try:
-        data = keypath.substitute(base, run.params)
+        data = substitute(base, run.params)
         parse_scenario(data, base_file)
-    except keypath.KeyPathError as exc:
+    except KeyPathError as exc:
         raise ScenarioError(file, f'vary."{exc.path}"', exc.problem) from None
     except ScenarioError as exc:
-        key = keypath.from_scenario_key(data, exc.key)
+        key = from_scenario_key(data, exc.key)
         blamed = [
             p for p in run.params if key == p or key.startswith(f"{p}.") or p.startswith(f"{key}.")
         ]

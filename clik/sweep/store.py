@@ -14,8 +14,8 @@ Layout of the output folder ``DIR``:
   When a sweep completes, the parts are compacted into one file (a crash
   during that leaves duplicate rows, which readers here drop by ``run_id``
   and the next run of the sweep compacts away).
-- ``DIR/results.csv`` instead, where pyarrow is not installed (or with
-  ``fmt="csv"``): a header, then rows appended with ``flush`` and ``fsync``;
+- ``DIR/results.csv`` instead, with ``fmt="csv"`` (``clik sweep --format
+  csv``): a header, then rows appended with ``flush`` and ``fsync``;
   a partial last line (a crash mid-write) is cut off when the file is opened.
   Parameters, lists and dicts are written as JSON text.
 - ``DIR/runs/<run_id>/summary.json`` and ``trajectory.npz`` with
@@ -38,8 +38,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from clik.errors import OutputExistsError
-from clik.result import write_json
+from clik.errors import InputError, OutputExistsError
+from clik.io import write_json
 
 MANIFEST = "sweep.json"
 PARQUET = "results.parquet"
@@ -74,15 +74,6 @@ COLUMNS: tuple[tuple[str, str], ...] = (
 (scenario, build, run) on the worker [s]. ``events`` and
 ``min_obstacle_distance_by_obstacle`` are JSON text.
 """
-
-
-def have_pyarrow() -> bool:
-    """Whether Parquet can be written (pyarrow importable)."""
-    try:
-        import pyarrow.parquet  # noqa: F401
-    except ImportError:
-        return False
-    return True
 
 
 class SweepOutputExistsError(OutputExistsError):
@@ -146,7 +137,8 @@ class ResultStore:
             manifest: The sweep's manifest (``fingerprint``, ``parameters``, ...).
             param_values: Every value each parameter takes (to type its column).
             force: Start over in a folder holding something else.
-            fmt: ``"parquet"``, ``"csv"`` or ``"auto"`` (Parquet where pyarrow is installed).
+            fmt: ``"parquet"``, ``"csv"`` or ``"auto"`` (Parquet). Resuming keeps the
+                folder's format, whatever ``fmt``.
 
         Raises:
             SweepOutputExistsError: ``out`` is not empty and holds no results of this
@@ -154,8 +146,6 @@ class ResultStore:
         """
         out = Path(out)
         if fmt not in ("auto", "parquet", "csv"):
-            from clik.errors import InputError
-
             raise InputError("format", "'auto', 'parquet' or 'csv'", fmt)
         same = check_folder(out, manifest["fingerprint"], force)
         old = _read_manifest(out)
@@ -169,7 +159,7 @@ class ResultStore:
             param_types = dict(old.get("param_types", {}))
         else:
             if fmt == "auto":
-                fmt = "parquet" if have_pyarrow() else "csv"
+                fmt = "parquet"
             param_types = _param_types(param_values) if fmt == "parquet" else {}
             json_parameters = [p for p in param_values if param_types.get(p, "json") == "json"]
             write_json(
@@ -182,10 +172,6 @@ class ResultStore:
                     "param_types": param_types,
                 },
             )
-        if fmt == "parquet" and not have_pyarrow():
-            from clik.errors import InputError
-
-            raise InputError("format", "pyarrow installed for a Parquet sweep folder", fmt)
         store = cls(out, list(manifest["parameters"]), fmt, json_parameters, param_types)
         store._load_ids()
         return store
@@ -295,7 +281,7 @@ class ResultStore:
 
     def write_run_files(self, run_id: str, summary: dict[str, Any], trajectory: bytes) -> Path:
         """``DIR/runs/<run_id>/summary.json`` and ``trajectory.npz`` (``--keep-trajectories``)."""
-        from clik.result import atomic_write
+        from clik.io import atomic_write
 
         folder = self.out / RUNS / run_id
         folder.mkdir(parents=True, exist_ok=True)
@@ -354,19 +340,28 @@ def read_results(out: str | Path) -> list[dict[str, Any]]:
     """
     out = Path(out)
     manifest = _manifest_of(out)
-    parameters = list(manifest["parameters"])
-    json_parameters = set(manifest.get("json_parameters", []))
     if manifest["format"] == "parquet":
-        table = _read_parquet(out / PARQUET)
-        rows = [] if table is None else _dedup(table).to_pylist()
-        for row in rows:
-            for p in json_parameters:
-                if row.get(p) is not None:
-                    row[p] = json.loads(row[p])
-        return rows
+        return _parquet_rows(out / PARQUET, set(manifest.get("json_parameters", [])))
+    return _csv_rows(out / CSV, list(manifest["parameters"]))
+
+
+def _parquet_rows(folder: Path, json_parameters: set[str]) -> list[dict[str, Any]]:
+    """The rows of a Parquet dataset folder, one per run id, JSON parameters decoded."""
+    table = _read_parquet(folder)
+    rows: list[dict[str, Any]] = [] if table is None else _dedup(table).to_pylist()
+    for row in rows:
+        for p in json_parameters:
+            if row.get(p) is not None:
+                row[p] = json.loads(row[p])
+    return rows
+
+
+def _csv_rows(path: Path, parameters: list[str]) -> list[dict[str, Any]]:
+    """The rows of a CSV results table, one per run id (the first), cells typed."""
     types = dict(COLUMNS)
-    rows, seen = [], set()
-    with open(out / CSV, newline="", encoding="utf-8") as f:
+    rows: list[dict[str, Any]] = []
+    seen: set[str] = set()
+    with open(path, newline="", encoding="utf-8") as f:
         for raw in csv.DictReader(f):
             if raw["run_id"] in seen:
                 continue

@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from clik.scenario import parse_scenario
-from clik.sweep import keypath
+from clik.sweep.keypath import substitute
 
 if TYPE_CHECKING:
     from clik.robot import Robot
@@ -169,7 +169,7 @@ def run_one(
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            scenario = parse_scenario(keypath.substitute(base_data, params), base_file)
+            scenario = parse_scenario(substitute(base_data, params), base_file)
             run = build_run(scenario, cached_robot(scenario.robot))
             result = run.execute()
             summary = result.summary()

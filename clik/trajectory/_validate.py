@@ -7,8 +7,10 @@ Every check normalises its input to a float array and raises
 from __future__ import annotations
 
 import math
+from typing import SupportsFloat, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from clik.errors import InputError
 
@@ -19,7 +21,7 @@ ROTATION_TOLERANCE = 1e-6
 def _shown(value: object) -> object:
     """What to show of a bad value in a message: small values as is, big ones by shape."""
     try:
-        shape = np.shape(value)
+        shape = np.shape(cast("npt.ArrayLike", value))  # anything: np.shape raises if it must
     except (TypeError, ValueError):  # ragged nested sequences
         return value
     if int(np.prod(shape)) > 12:
@@ -39,7 +41,7 @@ def finite_scalar(value: object, name: str, unit: str) -> float:
         The value as a float.
     """
     try:
-        number = float(value)  # type: ignore[arg-type]
+        number = float(cast("SupportsFloat | str", value))  # anything else raises TypeError
     except (TypeError, ValueError):
         raise InputError(name, f"a finite number {unit}", _shown(value)) from None
     if isinstance(value, bool) or not math.isfinite(number):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -101,7 +101,7 @@ class Function(Trajectory):
 def _pair(result: object, where: str) -> tuple[np.ndarray, np.ndarray]:
     """Split the callable's result into two float arrays."""
     try:
-        x, xdot = result  # type: ignore[misc]
+        x, xdot = cast("tuple[object, object]", result)  # checked here, at run time
         return np.asarray(x, dtype=float), np.asarray(xdot, dtype=float)
     except (TypeError, ValueError):
         raise InputError("trajectory", _EXPECTED, f"{type(result).__name__} {where}") from None

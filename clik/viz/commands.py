@@ -17,7 +17,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-import umsgpack
+import umsgpack  # type: ignore[import-untyped]  # u-msgpack-python ships no type hints
 
 Command = dict[str, Any]
 """One viewer command: a map with ``type`` and ``path`` keys."""
@@ -33,7 +33,7 @@ INTERPOLATE_DISCRETE = 2300
 """three.js ``InterpolateDiscrete``: a track holds each key's value until the next key."""
 
 
-def typed_array(array: np.ndarray, dtype: type = np.float32) -> umsgpack.Ext:
+def typed_array(array: np.ndarray, dtype: type[np.generic] = np.float32) -> umsgpack.Ext:
     """A numpy array as a msgpack extension the viewer decodes into a JavaScript typed array.
 
     Args:
@@ -43,12 +43,12 @@ def typed_array(array: np.ndarray, dtype: type = np.float32) -> umsgpack.Ext:
     Returns:
         The extension object.
     """
-    data = np.ascontiguousarray(array, dtype=dtype).reshape(-1)
+    data: np.ndarray = np.ascontiguousarray(array, dtype=dtype).reshape(-1)
     _, code = _TYPED_ARRAYS[np.dtype(dtype)]
     return umsgpack.Ext(code, data.astype(data.dtype.newbyteorder("<")).tobytes())
 
 
-def buffer_attribute(array: np.ndarray, dtype: type = np.float32) -> dict[str, Any]:
+def buffer_attribute(array: np.ndarray, dtype: type[np.generic] = np.float32) -> dict[str, Any]:
     """A three.js ``BufferAttribute``: ``array`` is (count, item_size) or (count,)."""
     array = np.asarray(array)
     name, _ = _TYPED_ARRAYS[np.dtype(dtype)]

@@ -17,9 +17,9 @@ import json
 import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
-from clik.result import atomic_write
+from clik.io import atomic_write
 from clik.viz import palette
 from clik.viz.commands import Command, color_int, pack
 from clik.viz.scene import Geometry, build_scene
@@ -30,7 +30,7 @@ if TYPE_CHECKING:
 
 
 def _viewer_js() -> Path:
-    """meshcat's viewer bundle, found without importing meshcat (which imports IPython)."""
+    """Meshcat's viewer bundle, found without importing meshcat (which imports IPython)."""
     spec = importlib.util.find_spec("meshcat")
     if spec is None or not spec.submodule_search_locations:
         raise ModuleNotFoundError("meshcat is not installed: pip install meshcat")
@@ -39,6 +39,12 @@ def _viewer_js() -> Path:
 
 VIEWER_JS = _viewer_js()
 """meshcat's viewer bundle (three.js, msgpack, the viewer)."""
+
+
+class _MeshcatCommand(Protocol):
+    """A ``meshcat.commands`` object: it lowers itself to the map the viewer decodes."""
+
+    def lower(self) -> Command: ...
 
 
 class Recorder:
@@ -51,9 +57,13 @@ class Recorder:
     def __init__(self) -> None:
         self.messages: list[bytes] = []
 
-    def send(self, command: object) -> None:
-        """Record a command: a dict, or a meshcat command object (with ``lower()``)."""
-        data = command if isinstance(command, dict) else command.lower()  # type: ignore[attr-defined]
+    def send(self, command: Command | _MeshcatCommand) -> None:
+        """Record a command: a dict, or a meshcat command object (with ``lower()``).
+
+        Args:
+            command: The command.
+        """
+        data = command if isinstance(command, dict) else command.lower()
         self.messages.append(pack(data))
 
     def extend(self, commands: Iterable[Command]) -> Recorder:

@@ -63,7 +63,7 @@ class MeshcatServer:
         self.process = process
         self.zmq_url = zmq_url
         self.web_url = web_url
-        self._context = zmq.Context.instance()
+        self._context: zmq.Context[zmq.Socket[bytes]] = zmq.Context.instance()
         self._socket: Any = None
         self._connect()
         atexit.register(self.stop)
@@ -179,7 +179,7 @@ def _terminate(process: subprocess.Popen[bytes]) -> None:
 
 
 def _bridge() -> Any:
-    """meshcat's ZMQ-websocket bridge, listening on :data:`LOOPBACK` only, free ports.
+    """Meshcat's ZMQ-websocket bridge, listening on :data:`LOOPBACK` only, free ports.
 
     Two more changes: a browser that connects is sent the scene's objects
     before its animation (meshcat replays each node's animation with the node,
@@ -192,11 +192,11 @@ def _bridge() -> Any:
     from meshcat.servers.tree import walk
     from meshcat.servers.zmqserver import ZMQWebSocketBridge
 
-    class NoIcon(tornado.web.RequestHandler):  # type: ignore[misc]
+    class NoIcon(tornado.web.RequestHandler):
         def get(self) -> None:
             self.set_status(204)
 
-    class LoopbackBridge(ZMQWebSocketBridge):  # type: ignore[misc]
+    class LoopbackBridge(ZMQWebSocketBridge):
         bound_port = 0
 
         def send_scene(self, websocket: Any) -> None:

@@ -179,7 +179,7 @@ def monitor_segments(
         rows = [code for code, n in enumerate(names) if n.startswith(f"obstacle:{spec['name']}:")]
         row_active = np.zeros(len(timeline), dtype=bool)
         if active is not None and rows:
-            row_active = np.isin(np.asarray(active)[timeline.index], rows).any(axis=1)
+            np.isin(np.asarray(active)[timeline.index], rows).any(axis=1, out=row_active)
         near = distance[:, o] < threshold
         visible = ~row_active & (distance[:, o] < threshold + max(2.0 * threshold, 0.05))
         if not visible.any():

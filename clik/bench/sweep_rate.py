@@ -1,10 +1,14 @@
-"""The sweep line of ``clik bench``: runs per second on a local cluster of N workers."""
+"""Sweep: runs per second of a fixed sweep on a local Dask cluster of 1 and of 2 workers."""
 
 from __future__ import annotations
 
 import tempfile
 from pathlib import Path
+from typing import Any
 
+import numpy as np
+
+from clik.bench.config import BenchConfig, Log
 from clik.errors import InputError
 
 BENCH_SWEEP = """\
@@ -15,7 +19,7 @@ seed = {seed}
 uniform = {{ low = [0.66, -0.32, 0.0], high = [0.74, -0.24, 0.0], samples = {samples} }}
 """
 """The fixed sweep: the case study (law (9), both constraints, 3 s at 1 ms, about 0.25 s a
-run on one core), the pin at uniform positions around the paper's."""
+run on one core), the pin at uniform positions around the case study's."""
 
 
 def sweep_rate(workers: int, runs: int) -> float:
@@ -31,6 +35,9 @@ def sweep_rate(workers: int, runs: int) -> float:
 
     Returns:
         Runs per second [1/s].
+
+    Raises:
+        InputError: ``workers`` or ``runs`` is not an integer >= 1.
     """
     from clik.sweep.execute import dask_client, run_sweep
 
@@ -48,3 +55,28 @@ def sweep_rate(workers: int, runs: int) -> float:
             run_sweep(warm, root / "warm", client=client, progress=False)
             report = run_sweep(timed, root / "timed", client=client, progress=False)
     return report.rate
+
+
+def bench_sweep(config: BenchConfig, log: Log) -> dict[str, Any]:
+    """Runs per second of a sweep on a local Dask cluster of 1 and of 2 workers.
+
+    The two cluster sizes alternate ``sweep_repeats`` times (medians taken), so a
+    busy moment of the machine hits both.
+
+    Args:
+        config: Sizes of the suite (``sweep_runs``, ``sweep_repeats``).
+        log: Progress callback.
+    """
+    rates: dict[int, list[float]] = {1: [], 2: []}
+    for _ in range(config.sweep_repeats):
+        for workers in (1, 2):
+            rates[workers].append(sweep_rate(workers, config.sweep_runs))
+            log(f"  sweep, {workers} worker(s): {rates[workers][-1]:.2f} runs/s")
+    one, two = float(np.median(rates[1])), float(np.median(rates[2]))
+    return {
+        "runs": config.sweep_runs,
+        "runs_per_s_1_worker": one,
+        "runs_per_s_2_workers": two,
+        "speedup_2_workers": two / one,
+        "all_runs_per_s": {str(k): v for k, v in rates.items()},
+    }

@@ -1,0 +1,42 @@
+"""``clik bench``: the performance suite, with pink side by side, in one process.
+
+What is measured (all through clik's public API, on the machine it runs on):
+
+- **Step cost** [us per sample] (:mod:`clik.bench.step`): whole runs of
+  :meth:`clik.Tracker.run`, ``result.wall_time_s / result.steps`` (the loop's own
+  cost: kinematics, law, constraints, recording; the trajectory is sampled before
+  the clock starts). Lines (:mod:`clik.bench.step_lines`): the planar 4R arm on the
+  case study's line (law (9)); the Panda's pose task on the shipped circle
+  (``panda_circle``) with law (10) and with law (9) (per-row gains inside the
+  explicit-Euler bound); the same with three sphere obstacles against every link's
+  convex collision geometry and joint-range rows monitored, placed so that no
+  obstacle row, or one, is active; and pink's step (:mod:`clik.bench.step_pink`:
+  ``FrameTask`` + ``PostureTask``, ``ConfigurationLimit``, ``solve_ik`` +
+  ``integrate_inplace``) on the same model and reference.
+- **Single-pose solve** (:mod:`clik.bench.solve`): seeded random reachable Panda
+  poses (forward kinematics of random configurations inside the limits), from the
+  reference configuration, tolerance 1e-4 m and 1e-3 rad, checked independently of
+  each solver (``|p_d - p|`` and ``|log3(R_d R^T)|``): :func:`clik.solve` against
+  pink iterated to convergence (capped, :mod:`clik.bench.solve_pink`) on the same
+  targets.
+- **Case study** (:mod:`clik.bench.case_study`): the eight shipped runs
+  (:data:`clik.scenarios.CASE_STUDY`), total wall time of ``execute()``, with and
+  without building (robot loading).
+- **Memory** (:mod:`clik.bench.memory`): peak RSS growth of a 10^6-sample planar run
+  with full recording and with ``record_every`` decimation, each in a fresh
+  subprocess.
+- **Sweep** (:mod:`clik.bench.sweep_rate`): runs per second of a fixed sweep on a
+  local Dask cluster of 1 and of 2 workers.
+
+Fairness: the compared step variants run interleaved, one whole run of each per
+round (the order rotates every round) after one warm-up run each, and the solve
+benchmark alternates clik and pink target by target. Figures are medians over
+rounds (or targets) with p10 and p90; ratios are pink's median over clik's median
+from the same rounds.
+
+The targets each figure is compared with are data, ``targets.toml`` beside this
+file (:mod:`clik.bench.targets`). :func:`clik.bench.suite.run_bench` writes
+``out/bench.json`` and ``out/bench.md`` (:mod:`clik.bench.report`); pink
+(``pip install clik[bench]``) is optional: without it its lines are ``null``.
+``python -m clik.bench --out DIR [--quick]`` runs it from a shell.
+"""

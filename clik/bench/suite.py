@@ -1,0 +1,203 @@
+"""The whole suite: run every measurement, write ``bench.json`` and ``bench.md``.
+
+:func:`run_bench` is what ``clik bench`` calls; :func:`main` is
+``python -m clik.bench``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from clik.bench.case_study import bench_case_study
+from clik.bench.config import FULL, QUICK, BenchConfig, Log
+from clik.bench.machine import cpu_seconds, machine_info, versions
+from clik.bench.memory import bench_memory
+from clik.bench.pink_backend import Pink, find_pink
+from clik.bench.report import markdown
+from clik.bench.solve import bench_solve
+from clik.bench.stats import ratio
+from clik.bench.step import bench_steps
+from clik.bench.sweep_rate import bench_sweep
+from clik.bench.targets import evaluate_targets, load_targets
+from clik.io import write_json
+
+REQUIRED_KEYS = (
+    "step_us.planar4r",
+    "step_us.panda_pose",
+    "step_us.panda_pose_obstacles",
+    "step_us.pink_panda_pose",
+    "solve.success_rate",
+    "solve.median_us",
+    "solve.pink_median_us",
+    "case_study_all_runs_s",
+    "memory_growth_mb.decimated",
+    "memory_growth_mb.full",
+    "sweep_runs_per_s.1_worker",
+    "sweep_runs_per_s.2_workers",
+)
+"""Dotted key paths ``bench.json`` always holds (pink's are ``null`` without pink)."""
+
+STEP_US = {
+    "planar4r": "planar4r",
+    "planar4r_case_study_both": "planar4r_case_study_both",
+    "panda_pose": "panda_pose",
+    "panda_pose_transpose": "panda_pose_transpose",
+    "panda_pose_obstacles": "panda_pose_obstacles_1_active",
+    "panda_pose_obstacles_0_active": "panda_pose_obstacles_0_active",
+    "panda_pose_obstacles_1_active": "panda_pose_obstacles_1_active",
+    "panda_pose_obstacles_transpose": "panda_pose_obstacles_transpose",
+    "pink_panda_pose": "pink_panda_pose",
+    "pink_panda_pose_default_limits": "pink_panda_pose_default_limits",
+}
+"""``bench.json``'s ``step_us`` keys and the step line whose median each is."""
+
+
+@dataclass(frozen=True)
+class Measured:
+    """What each measurement returned.
+
+    Attributes:
+        steps: Per step line (:func:`~clik.bench.step.bench_steps`).
+        solve: Single-pose solve (:func:`~clik.bench.solve.bench_solve`).
+        case: Case study (:func:`~clik.bench.case_study.bench_case_study`).
+        memory: Memory (:func:`~clik.bench.memory.bench_memory`).
+        sweep: Sweep (:func:`~clik.bench.sweep_rate.bench_sweep`).
+    """
+
+    steps: dict[str, Any]
+    solve: dict[str, Any]
+    case: dict[str, Any]
+    memory: dict[str, Any]
+    sweep: dict[str, Any]
+
+
+def measure(config: BenchConfig, pink: Pink | None, say: Log) -> Measured:
+    """Run every measurement of the suite, in order.
+
+    Args:
+        config: Sizes of the suite.
+        pink: The installed pink, or None to leave its lines out.
+        say: Progress callback.
+    """
+    say("step cost (interleaved rounds)")
+    steps = bench_steps(config, pink, say)
+    say("single-pose solve")
+    solve = bench_solve(config, pink, say)
+    say("case study")
+    case = bench_case_study(config, say)
+    say("memory (two subprocesses)")
+    memory = bench_memory(config, say)
+    say("sweep on a local Dask cluster, 1 and 2 workers")
+    sweep = bench_sweep(config, say)
+    return Measured(steps, solve, case, memory, sweep)
+
+
+def figures(config: BenchConfig, m: Measured) -> dict[str, Any]:
+    """The report's measured sections, from the step medians to the sweep.
+
+    Args:
+        config: Sizes of the suite.
+        m: What the measurements returned.
+    """
+
+    def median(name: str) -> float | None:
+        return m.steps[name]["median_us"] if name in m.steps else None
+
+    obstacles = m.steps["panda_pose_obstacles_1_active"]
+    return {
+        "step_us": {key: median(line) for key, line in STEP_US.items()},
+        "steps": m.steps,
+        "ratios": {
+            "pink_over_panda_pose": ratio(median("pink_panda_pose"), median("panda_pose")),
+            "pink_over_panda_pose_obstacles": ratio(
+                median("pink_panda_pose"), median("panda_pose_obstacles_1_active")
+            ),
+            "pink_over_solve": m.solve.get("speedup_vs_pink"),
+        },
+        "solve": m.solve,
+        "case_study_all_runs_s": m.case["all_runs_s"],
+        "case_study": m.case,
+        "panda_obstacles_run": {
+            "duration_s": config.panda_duration,
+            "wall_s": obstacles["median_us"] * 1e-6 * obstacles["steps_per_run"],
+            "realtime_factor": obstacles["realtime_factor"],
+        },
+        "memory_growth_mb": {
+            "full": m.memory["full"]["growth_mb"],
+            "decimated": m.memory["decimated"]["growth_mb"],
+        },
+        "memory": m.memory,
+        "sweep_runs_per_s": {
+            "1_worker": m.sweep["runs_per_s_1_worker"],
+            "2_workers": m.sweep["runs_per_s_2_workers"],
+        },
+        "sweep": m.sweep,
+    }
+
+
+def run_bench(
+    out: Path, quick: bool = False, log: Log | None = None, targets: Path | None = None
+) -> dict[str, Any]:
+    """Run the suite and write ``out/bench.json`` and ``out/bench.md``.
+
+    Args:
+        out: Output folder (created if missing).
+        quick: Smoke settings (:data:`~clik.bench.config.QUICK`): the same report
+            structure in a few seconds.
+        log: Called with one line per stage (e.g. ``print``); default silent.
+        targets: Targets file; default the shipped ``targets.toml``.
+
+    Returns:
+        The report written to ``bench.json``.
+    """
+    say: Log = log if log is not None else (lambda _line: None)
+    config = QUICK if quick else FULL
+    target_list = load_targets(targets)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    pink, why_not = find_pink()
+    report: dict[str, Any] = {
+        "quick": quick,
+        "config": asdict(config),
+        "machine": machine_info(),
+        "versions": versions(),
+        "pink": {
+            "solver": None if pink is None else pink.solver,
+            "available": pink is not None,
+            "reason": why_not,
+        },
+    }
+    started = time.perf_counter()
+    cpu_started = cpu_seconds()
+    report.update(figures(config, measure(config, pink, say)))
+    report["targets"] = evaluate_targets(report, target_list)
+    report["bench_wall_time_s"] = time.perf_counter() - started
+    # Below 1, other processes took the CPU during the bench: figures are inflated.
+    report["machine"]["cpu_share"] = round(
+        (cpu_seconds() - cpu_started) / report["bench_wall_time_s"], 3
+    )
+    if hasattr(os, "getloadavg"):
+        report["machine"]["load_average_1min_end"] = round(os.getloadavg()[0], 2)
+    write_json(out / "bench.json", report)
+    (out / "bench.md").write_text(markdown(report))
+    return report
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """``python -m clik.bench --out DIR [--quick]``: run the suite, print ``bench.md``.
+
+    Args:
+        argv: Command-line arguments; default ``sys.argv[1:]``.
+    """
+    parser = argparse.ArgumentParser(prog="python -m clik.bench")
+    parser.add_argument("--out", type=Path, default=Path("out/bench"))
+    parser.add_argument("--quick", action="store_true")
+    args = parser.parse_args(argv)
+    run_bench(args.out, quick=args.quick, log=print)
+    print((args.out / "bench.md").read_text())

@@ -1,0 +1,158 @@
+"""The shape of the package: imports that flow one way, short functions, the method shipped.
+
+These checks read the source (``ast``), not the running package, so they see
+imports under ``TYPE_CHECKING`` and inside functions too: a circle hidden there
+is still a circle for a reader.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "clik"
+METHOD = ROOT / "docs" / "method.md"
+
+MAX_FUNCTION_LINES = 80
+"""Longest function or method in ``clik/``, ``def`` line to last line."""
+
+APPLICATIONS = ("clik.cli", "clik.demo", "clik.bench", "clik.sweep", "clik.viz", "clik.plot")
+"""The floor above the core: they may import the core, never the other way round."""
+
+
+def module_name(path: Path) -> str:
+    """Dotted name of a module file under ``clik/``."""
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def imported(name: str, path: Path) -> set[str]:
+    """The ``clik`` modules that module ``name`` imports, anywhere in its file."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parent = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join([*parent, *([base] if base else [])])
+            for alias in node.names:
+                sub = f"{base}.{alias.name}"
+                found.add(sub if sub in MODULES else base)
+    return {m for m in found if m in MODULES and m != name}
+
+
+GRAPH = {name: imported(name, path) for name, path in MODULES.items()}
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_no_import_circle_among_clik_modules():
+    assert cycles(GRAPH) == []
+
+
+def _is_application(name: str) -> bool:
+    return any(name == app or name.startswith(app + ".") for app in APPLICATIONS)
+
+
+@pytest.mark.parametrize("name", sorted(n for n in GRAPH if not _is_application(n) and n != "clik"))
+def test_core_modules_do_not_import_applications(name):
+    assert not [m for m in GRAPH[name] if _is_application(m)]
+
+
+def test_cli_is_imported_by_no_module():
+    assert not [n for n, deps in GRAPH.items() if "clik.cli" in deps]
+
+
+def long_functions(path: Path) -> list[tuple[str, int]]:
+    """Functions of ``path`` longer than :data:`MAX_FUNCTION_LINES`, with their lengths."""
+    tree = ast.parse(path.read_text(), str(path))
+    return [
+        (node.name, node.end_lineno - node.lineno + 1)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef)
+        and node.end_lineno is not None
+        and node.end_lineno - node.lineno + 1 > MAX_FUNCTION_LINES
+    ]
+
+
+@pytest.mark.parametrize("name", sorted(MODULES))
+def test_functions_fit_on_a_screen(name):
+    assert long_functions(MODULES[name]) == []
+
+
+CITATION = re.compile(r"(?<![\w)\]])\((\d{1,2})\)(?:\s*-\s*\((\d{1,2})\))?")
+"""An equation number in parentheses, ``(13)``, or a range ``(13)-(15)``."""
+
+
+def cited(text: str) -> set[int]:
+    """Equation numbers cited in ``text`` (ranges expanded)."""
+    numbers: set[int] = set()
+    for first, last in CITATION.findall(text):
+        numbers.update(range(int(first), int(last or first) + 1))
+    return numbers
+
+
+def test_citation_pattern():
+    assert cited("law (10), eqs. (13)-(15) and rows (22)") == {10, 13, 14, 15, 22}
+    assert cited("np.eye(4), f.read(1), x[0](2)") == set()
+
+
+def test_every_equation_cited_in_clik_is_in_docs_method():
+    in_code = set().union(*(cited(p.read_text()) for p in MODULES.values()))
+    assert in_code, "no citation found: the pattern is wrong"
+    documented = cited(METHOD.read_text())
+    assert sorted(in_code - documented) == []
+
+
+def test_code_points_at_the_shipped_method():
+    assert not [n for n, p in MODULES.items() if "METHOD.md" in p.read_text()]
+    readme = (ROOT / "README.md").read_text()
+    assert "docs/method.md" in readme
