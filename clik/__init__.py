@@ -18,8 +18,10 @@ from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
 
 from clik import trajectory
+from clik.engine import check_installed
 from clik.errors import (
     ClikError,
+    EngineError,
     FrameNotFound,
     GeometryError,
     InfeasibleError,
@@ -38,6 +40,7 @@ from clik.tracking import ReachWarning, StabilityWarning, Tracker, track
 
 __all__ = [
     "ClikError",
+    "EngineError",
     "FrameNotFound",
     "GeometryError",
     "InfeasibleError",
@@ -67,6 +70,8 @@ try:
     """The installed distribution's version (one source: ``pyproject.toml``)."""
 except PackageNotFoundError:  # a source tree on sys.path, not installed
     __version__ = "0+unknown"
+
+check_installed()  # a mismatched engine fails here, with the versions, not later
 
 if TYPE_CHECKING:
     from clik import plot, viz

@@ -75,6 +75,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
     from clik.runner import build
 
     run = build(args.scenario)
+    if args.engine is not None:
+        run.tracker.engine = args.engine
     out = prepare_out(Path(args.out), args.force)
     result = run.execute(ProgressBar(run.scenario.name, None if not args.quiet else False))
     summary = write_outputs(result, out)
@@ -246,6 +248,11 @@ def _add_solve(sub: Any) -> None:
     s.add_argument("--force", action="store_true", help="write into an existing output folder")
     s.add_argument("--html", action="store_true", help="also write DIR/scene.html")
     s.add_argument("--plots", action="store_true", help="also write PNG plots")
+    s.add_argument(
+        "--engine",
+        choices=("compiled", "python"),
+        help="compiled (default: the scenario's [solver] engine) or python (the reference loop)",
+    )
     s.add_argument("--quiet", action="store_true")
     s.set_defaults(func=cmd_solve)
 

@@ -167,5 +167,19 @@ def native_message(error: BaseException) -> str:
     return " ".join(text.split())
 
 
+class EngineError(ClikError):
+    """The compiled engine cannot be used: not built, or built against other versions.
+
+    Attributes:
+        problem: What is wrong, with the versions involved and the fix.
+    """
+
+    exit_code = 4
+
+    def __init__(self, problem: str) -> None:
+        self.problem = problem
+        super().__init__(f"compiled engine: {problem}")
+
+
 EXIT_CODES = {"bad_input": 2, "infeasible": 3, "internal": 4}
 """Exit codes of the command line: bad input, infeasible problem, internal error."""

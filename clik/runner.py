@@ -125,6 +125,7 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
             dt=solver["dt"],
             damping=solver["damping"],
             constraints=constraints,
+            engine=solver["engine"],
         )
     except InputError as exc:
         raise _where(scenario, f"solver.{exc.field}", exc) from None

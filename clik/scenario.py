@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from clik.bounds import MAX_STEPS
+from clik.engine import ENGINES
 from clik.errors import ClikError, ScenarioError
 from clik.robot import JointValues
 from clik.schema import Table
@@ -162,6 +163,7 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
         "damping": slv.number("damping", 0.0, minimum=0.0),
         "record_every": slv.number("record_every", 1, minimum=1, integer=True),
         "settle": slv.number("settle", 0.0, minimum=0.0, unit="[s]"),
+        "engine": slv.string("engine", "compiled", ENGINES),
     }
     if trajectory["duration"] is not None:
         steps = (trajectory["duration"] + solver["settle"]) / solver["dt"] + 1

@@ -10,14 +10,21 @@ where the world-frame ``log3`` error stalls). After each step joints are
 clipped into their limits; an attempt that stalls (no 0.1 % progress in 15
 iterations) or hits the iteration limit restarts from a seeded random
 configuration inside the limits, up to ``restarts`` times.
+
+This module is the readable specification; ``engine="compiled"`` (the default)
+runs the same iteration in C++ (``src/engine/solve.cpp``), with the same
+restart configurations drawn here from the same seed.
 """
 
 from __future__ import annotations
 
 import math
 import time
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pinocchio as pin
@@ -25,6 +32,11 @@ import pinocchio as pin
 from clik.errors import InputError
 from clik.laws import LawName, check_law, solve_small
 from clik.task import Task
+
+if TYPE_CHECKING:
+    from clik.robot import Robot
+
+EngineName = Literal["compiled", "python"]
 
 
 @dataclass(frozen=True)
@@ -73,6 +85,23 @@ def _target_arrays(target: object) -> tuple[np.ndarray | None, np.ndarray | None
     )
 
 
+def _checked_target(task: Task, target: object) -> tuple[np.ndarray, np.ndarray]:
+    """Target position and rotation for ``task``, placeholders where it has no such rows.
+
+    Raises:
+        InputError: The target misses what the task needs, or is not finite.
+    """
+    p_d, R_d = _target_arrays(target)
+    if task.has_position and p_d is None:
+        raise InputError("target", f"a position for the {task.kind} task")
+    if task.has_orientation and R_d is None:
+        raise InputError("target", f"an orientation for the {task.kind} task")
+    for arr in (p_d, R_d):
+        if arr is not None and not np.all(np.isfinite(arr)):
+            raise InputError("target", "finite values", arr.tolist())
+    return (np.zeros(3) if p_d is None else p_d), (np.eye(3) if R_d is None else R_d)
+
+
 @dataclass(frozen=True)
 class _Settings:
     """What :func:`solve` iterates with (see its arguments)."""
@@ -117,19 +146,10 @@ class _Problem:
     def __init__(self, task: Task, target: object, settings: _Settings) -> None:
         self.task, self.settings = task, settings
         self.robot = task.robot
-        p_d, R_d = _target_arrays(target)
-        if task.has_position and p_d is None:
-            raise InputError("target", f"a position for the {task.kind} task")
-        if task.has_orientation and R_d is None:
-            raise InputError("target", f"an orientation for the {task.kind} task")
-        for arr in (p_d, R_d):
-            if arr is not None and not np.all(np.isfinite(arr)):
-                raise InputError("target", "finite values", arr.tolist())
         # (unused placeholders where the task has no such rows)
-        self.p_d = np.zeros(3) if p_d is None else p_d
-        self.R_d = np.eye(3) if R_d is None else R_d
+        self.p_d, self.R_d = _checked_target(task, target)
         self.full_pose = task.m == 6
-        self.target_se3 = pin.SE3(R_d, p_d) if self.full_pose else None
+        self.target_se3 = pin.SE3(self.R_d, self.p_d) if self.full_pose else None
         robot = self.robot
         bounded = np.isfinite(robot.lower) & np.isfinite(robot.upper) & (robot.nq == robot.nv)
         self.clip = bool(bounded.any())
@@ -228,6 +248,172 @@ def _norm3(v: np.ndarray) -> float:
     return math.sqrt(a * a + b * b + c * c)
 
 
+def _converged_reason(iterations: int) -> str:
+    return f"converged in {iterations} iterations"
+
+
+def _failure_reason(attempts: int, iterations: int, pos: float, rot: float) -> str:
+    return (
+        f"no convergence after {attempts} attempt(s), {iterations} iterations; best "
+        f"attempt: position error {pos:.3g} m, orientation error {rot:.3g} rad"
+    )
+
+
+def _random_configurations(robot: Robot, rng: np.random.Generator, count: int) -> np.ndarray:
+    """``count`` configurations (count, nq), row ``k`` the ``k``-th ``random_configuration(rng)``.
+
+    One vectorised draw: ``Generator.uniform`` with array bounds takes the same
+    doubles from the stream in the same order (row by row, joint by joint) and maps
+    each as the scalar call does, ``low + (high - low) u``.
+    """
+    model = robot.model
+    q = np.tile(pin.neutral(model), (count, 1))
+    lows: list[float] = []
+    highs: list[float] = []
+    bounded: list[tuple[int, int]] = []  # (column of the draw, q index)
+    continuous: list[tuple[int, int]] = []
+    for joint in model.joints[1:]:
+        i = joint.idx_q
+        low, high = model.lowerPositionLimit[i], model.upperPositionLimit[i]
+        if joint.nq == 2 and joint.nv == 1:
+            continuous.append((len(lows), i))
+            lows.append(-math.pi)
+            highs.append(math.pi)
+        elif joint.nq == 1 and math.isfinite(low) and math.isfinite(high):
+            if not low <= high:  # as random_configuration refuses it
+                expected = "a margin >= 0 [rad or m] smaller than half of every joint range"
+                raise InputError("margin", expected, got=0.0)
+            bounded.append((len(lows), i))
+            lows.append(float(low))
+            highs.append(float(high))
+    if not lows or count == 0:
+        return q
+    u = rng.uniform(lows, highs, size=(count, len(lows)))
+    for column, i in bounded:
+        q[:, i] = u[:, column]
+    for column, i in continuous:  # math.cos, math.sin as random_configuration
+        for k in range(count):
+            angle = float(u[k, column])
+            q[k, i : i + 2] = (math.cos(angle), math.sin(angle))
+    return q
+
+
+def _compiled_engine() -> ModuleType:
+    """The compiled engine module, its versions checked (the one place that loads it)."""
+    from clik.engine import load
+
+    return load()
+
+
+_SOLVERS: weakref.WeakKeyDictionary[Task, dict[tuple[object, ...], Any]] = (
+    weakref.WeakKeyDictionary()
+)
+"""Compiled solvers kept per task (dropped with it), keyed by the settings as given
+(:func:`_settings_key`), least recently used first. A solver holds no result between
+solves: each :func:`solve` takes its solver out while it runs and puts it back after,
+so a solve running in another thread builds its own."""
+
+_SOLVERS_PER_TASK = 8
+"""Solvers kept per task (the least recently used goes first)."""
+
+
+def _settings_key(*settings: object) -> tuple[object, ...]:
+    """A cache key of :func:`solve`'s settings: the values, and the types of the integers.
+
+    Equal keys mean settings that pass or fail the checks alike and give the same
+    solve (``1`` and ``1.0`` are the same step; ``100`` and ``100.0`` are not the same
+    ``max_iterations``: the second is refused).
+    """
+    return (*settings, type(settings[6]), type(settings[7]))
+
+
+def _compiled_solver(task: Task, key: tuple[object, ...]) -> tuple[Any, bool]:
+    """The compiled solver for ``task`` and these settings, taken out of the cache.
+
+    A new one is built, after the settings are checked, when none is kept.
+
+    Returns:
+        The solver and whether it may be put back (its key is hashable).
+
+    Raises:
+        InputError: A bad setting, named.
+    """
+    solvers = _SOLVERS.get(task)
+    try:
+        solver = None if solvers is None else solvers.pop(key, None)
+        hashable = True
+    except TypeError:  # e.g. a NumPy array as a setting
+        solver, hashable = None, False
+    if solver is not None:
+        return solver, True
+    s = _Settings(check_law(key[0]), *key[1:8])  # type: ignore[arg-type]
+    _check_settings(s)
+    solver = _compiled_engine().Solver(
+        task.robot.model, task.frame_id, task.rows.tolist(), law=s.law, step=s.step,
+        damping=s.damping, mu=s.mu, tolerance=s.tolerance,
+        orientation_tolerance=s.orientation_tolerance, max_iterations=s.max_iterations,
+    )  # fmt: skip
+    return solver, hashable
+
+
+def _keep_solver(task: Task, key: tuple[object, ...], solver: Any) -> None:
+    """Put a solver back into the cache, dropping the least recently used beyond the limit."""
+    solvers = _SOLVERS.get(task)
+    if solvers is None:
+        solvers = _SOLVERS[task] = {}
+    while len(solvers) >= _SOLVERS_PER_TASK:
+        del solvers[next(iter(solvers))]
+    solvers[key] = solver
+
+
+def _solve_compiled(
+    task: Task, target: object, q0: object, key: tuple[object, ...], seed: int | None
+) -> SolveResult:
+    """:func:`solve` in the compiled engine: the same checks, iteration, attempts and restarts.
+
+    The solver comes from the cache (:data:`_SOLVERS`), so a repeated solve costs
+    the target's check and the C++ run. A ``pin.SE3`` target and a ``q0`` that is
+    None or a float array of ``nq`` entries are checked for finite values in C++;
+    anything else, or a value that is not finite, goes through :func:`_checked_target`
+    and ``check_configuration`` (which name the bad input). The engine runs the
+    first attempt from ``q0``; only when it fails are the restart configurations
+    drawn (all ``restarts`` of them at once, vectorised: creating the generator
+    costs ~20 us) and handed over to continue the solve.
+    """
+    solver, keep = _compiled_solver(task, key)
+    robot = task.robot
+    if type(target) is pin.SE3 and (q0 is None or _plain_configuration(q0, robot.nq)):
+        p_d, R_d = target.translation, target.rotation
+        q = robot.q_reference if q0 is None else q0
+    else:
+        p_d, R_d = _checked_target(task, target)
+        q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
+    start = time.perf_counter()
+    out = solver.start(p_d, R_d, q)
+    if out is None:  # a value that is not finite: the checks in Python name it
+        _checked_target(task, target)
+        robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
+        raise AssertionError("the engine refused a finite target and q0")  # pragma: no cover
+    restarts = key[7]
+    if not out[0] and restarts:
+        rng = np.random.default_rng(seed)
+        out = solver.run(_random_configurations(robot, rng, restarts))  # type: ignore[arg-type]
+    elapsed = time.perf_counter() - start
+    if keep:
+        _keep_solver(task, key, solver)
+    success, q, iterations, attempts, pos, rot = out
+    if success:
+        reason = _converged_reason(iterations)
+    else:
+        reason = _failure_reason(attempts, iterations, pos, rot)
+    return SolveResult(success, reason, q, iterations, attempts, pos, rot, elapsed)
+
+
+def _plain_configuration(q: object, nq: int) -> bool:
+    """``q`` is a float64 NumPy array of shape (nq,) (its values are checked in C++)."""
+    return type(q) is np.ndarray and q.dtype == np.float64 and q.shape == (nq,)
+
+
 def solve(
     task: Task,
     target: pin.SE3 | np.ndarray | Sequence[float],
@@ -242,6 +428,7 @@ def solve(
     max_iterations: int = 100,
     restarts: int = 50,
     seed: int | None = 0,
+    engine: EngineName = "compiled",
 ) -> SolveResult:
     """Iterate a CLIK law until the task error is within tolerance.
 
@@ -258,7 +445,20 @@ def solve(
         max_iterations: Iterations per attempt.
         restarts: Random restarts (within joint limits) after a failed attempt.
         seed: Seed of the restarts' random generator.
+        engine: ``"compiled"`` (default) runs the iteration in clik's C++ engine;
+            ``"python"`` runs the code of this module. Both give the same results
+            (the same restarts from the same seed; ``q`` equal to rounding).
+
+    Raises:
+        InputError: A bad argument, named.
     """
+    if engine == "compiled":
+        key = _settings_key(
+            law, step, damping, mu, tolerance, orientation_tolerance, max_iterations, restarts
+        )
+        return _solve_compiled(task, target, q0, key, seed)
+    if engine != "python":
+        raise InputError("engine", "'compiled' or 'python'", engine)
     settings = _Settings(
         check_law(law), step, damping, mu, tolerance, orientation_tolerance,
         max_iterations, restarts,
@@ -276,7 +476,7 @@ def solve(
             q, converged, used, pos, rot = problem.attempt(q)
             iterations += used
             if converged:
-                reason = f"converged in {iterations} iterations"
+                reason = _converged_reason(iterations)
                 elapsed = time.perf_counter() - start
                 return SolveResult(True, reason, q, iterations, attempt, pos, rot, elapsed)
             if pos + rot < best_total:  # keep the best attempt for a failure report
@@ -285,9 +485,6 @@ def solve(
                 rng = np.random.default_rng(seed) if rng is None else rng
                 q = robot.random_configuration(rng)
     pos, rot = best_errors
-    reason = (
-        f"no convergence after {restarts + 1} attempt(s), {iterations} iterations; best "
-        f"attempt: position error {pos:.3g} m, orientation error {rot:.3g} rad"
-    )
+    reason = _failure_reason(restarts + 1, iterations, pos, rot)
     elapsed = time.perf_counter() - start
     return SolveResult(False, reason, best_q, iterations, restarts + 1, pos, rot, elapsed)

@@ -73,12 +73,9 @@ class StopChecks:
         """A reason when the step just computed is non-finite or too large."""
         jump = float(np.abs(qdot).max()) * self.dt if qdot.size else 0.0
         if not (math.isfinite(err) and math.isfinite(jump)):
-            return f"non-finite joint velocity or task error at t = {t:.6g} s"
+            return non_finite_reason(t)
         if jump > self.s.max_joint_step:
-            return (
-                f"a joint moved {jump:.3g} rad in one step at t = {t:.6g} s (task error "
-                f"{err:.3g}, limit max_joint_step = {self.s.max_joint_step:g})"
-            )
+            return joint_step_reason(t, jump, err, self.s.max_joint_step)
         return None
 
     def instability(self, k: int, ext: ExtendedTask, r: int, err: float) -> str | None:
@@ -93,15 +90,7 @@ class StopChecks:
         self.worst_margin = max(self.worst_margin, self.margin)
         if self.margin < 2.0 or err <= self.s.deadlock_error:
             return None
-        if self.law == "pseudoinverse":
-            return (
-                f"the gain is too high for dt: K dt = {self.margin:.3g} >= 2 (law (10) is "
-                f"stable for K dt < 2); the task error reached {err:.3g}"
-            )
-        return (
-            f"explicit Euler is unstable: dt lambda_max(K J_e J_e^T) = {self.margin:.3g} >= 2 "
-            f"along the path (lower the gain or dt); the task error reached {err:.3g}"
-        )
+        return instability_reason(self.law, self.margin, err)
 
     def deadlock(self, ext: ExtendedTask, r: int, err: float, blocked: float) -> bool:
         """Remark 2 held for ``deadlock_window``: the law cannot reduce the task error.
@@ -137,3 +126,29 @@ class StopChecks:
         stalled = err > (1.0 - self.s.stall_progress) * self.stall_err
         self.stall_k, self.stall_err = k, err
         return stalled
+
+
+def non_finite_reason(t: float) -> str:
+    """Why a run diverged: a non-finite value at ``t`` [s]."""
+    return f"non-finite joint velocity or task error at t = {t:.6g} s"
+
+
+def joint_step_reason(t: float, jump: float, err: float, max_joint_step: float) -> str:
+    """Why a run diverged: a joint step ``jump`` [rad or m] above the bound."""
+    return (
+        f"a joint moved {jump:.3g} rad in one step at t = {t:.6g} s (task error "
+        f"{err:.3g}, limit max_joint_step = {max_joint_step:g})"
+    )
+
+
+def instability_reason(law: str, margin: float, err: float) -> str:
+    """Why a run diverged: the gains break explicit Euler's bound (``margin`` >= 2)."""
+    if law == "pseudoinverse":
+        return (
+            f"the gain is too high for dt: K dt = {margin:.3g} >= 2 (law (10) is "
+            f"stable for K dt < 2); the task error reached {err:.3g}"
+        )
+    return (
+        f"explicit Euler is unstable: dt lambda_max(K J_e J_e^T) = {margin:.3g} >= 2 "
+        f"along the path (lower the gain or dt); the task error reached {err:.3g}"
+    )

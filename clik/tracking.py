@@ -22,6 +22,8 @@ import numpy as np
 import pinocchio as pin
 
 from clik.bounds import MAX_STEPS
+from clik.compiled_run import compiled_samples
+from clik.engine import ENGINES
 from clik.constraints.constraint_run import ConstraintRun
 from clik.errors import InputError
 from clik.extended_task import ExtendedTask
@@ -77,6 +79,9 @@ class Tracker:
             damping near singularities, see :func:`clik.laws.damped_solve`).
         beta_max: Bound on the nonlinear law's extra gain [1/s] (default ``2 alpha``).
         constraints: Optional constraint rows (obstacles, joint ranges), eq. (20)-(25).
+        engine: ``"compiled"`` (default: the samples run in ``clik._engine``) or
+            ``"python"`` (this module's loop, the engine's readable specification).
+            Both give the same statuses, events and joint trajectories.
     """
 
     def __init__(
@@ -88,7 +93,11 @@ class Tracker:
         damping: float = 0.0,
         beta_max: float | None = None,
         constraints: ConstraintSet | None = None,
+        engine: str = "compiled",
     ) -> None:
+        if engine not in ENGINES:
+            raise InputError("engine", " or ".join(repr(e) for e in ENGINES), engine)
+        self.engine = engine
         self.task = task
         self.robot = task.robot
         self.law = check_law(law)
@@ -280,6 +289,7 @@ class _Run:
         self.monitor = ViolationMonitor(_joint_range(robot, cset))
         self.checks = StopChecks(settings, tracker.law, self.dt)
         self.e6 = np.zeros(6)
+        self.steps, self.max_err, self.err = 0, 0.0, 0.0
         rows = task.rows
         self.pos_rows = rows[rows < 3]
         self.rot_rows = rows[rows >= 3]
@@ -337,16 +347,20 @@ class _Run:
         if why is None:
             why = checks.instability(k, self.ext, r, err)
         if why is not None:
-            return "diverged", why + self._active_clause(r)
+            return "diverged", why + self.active_clause(r)
         if checks.deadlock(self.ext, r, err, blocked):
-            return "deadlock", self._deadlock_reason(tk, err, r, qdot)
+            return "deadlock", self.deadlock_reason(tk, err, r, qdot)
         if checks.stall(k, err, at_rest):
-            s = checks.s
-            return "deadlock", self._deadlock_reason(tk, err, r, qdot) + (
-                f"; the error fell by less than {s.stall_progress:.0%} in "
-                f"{s.stall_window:g} s with the reference at rest"
-            )
+            return "deadlock", self.stall_reason(tk, err, r, qdot)
         return None
+
+    def stall_reason(self, tk: float, err: float, r: int, qdot: np.ndarray) -> str:
+        """A deadlock found by the stall check (the reference at rest)."""
+        s = self.checks.s
+        return self.deadlock_reason(tk, err, r, qdot) + (
+            f"; the error fell by less than {s.stall_progress:.0%} in "
+            f"{s.stall_window:g} s with the reference at rest"
+        )
 
     def observe_limits(self, tk: float, q: np.ndarray) -> None:
         """Record every limit crossed at this sample: joints, obstacle surfaces, link pairs."""
@@ -381,51 +395,58 @@ class _Run:
             q: Start configuration.
             out_of_reach: Why the reference is out of reach, added to a failed run's reason.
         """
+        start = time.perf_counter()
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            if self.tr.engine == "compiled":
+                status, reason = compiled_samples(self, q)
+            else:
+                status, reason = self.samples(q)
+        wall = time.perf_counter() - start
+        if self.progress is not None:
+            self.progress(self.N if status == "completed" else self.steps, self.N)
+        if status != "completed" and out_of_reach:
+            reason += f"; {out_of_reach}"
+        status, reason = self._final_status(status, reason)
+        return self._result(status, reason, wall, self.steps, self.max_err, self.err)
+
+    def samples(self, q: np.ndarray) -> tuple[str, str]:
+        """The loop, one sample at a time (the specification of the compiled engine).
+
+        Sets :attr:`steps`, :attr:`max_err` and :attr:`err`; returns the status and reason.
+        """
         model, m, dt, N = self.robot.model, self.task.m, self.dt, self.N
         crun, rec, t = self.crun, self.rec, self.t
         qdot = np.zeros(self.robot.nv)
         dq = np.zeros(self.robot.nv)
-        status, reason = "completed", f"reached the end of the trajectory at t = {t[-1]:.6g} s"
-        max_err = err = 0.0
-        steps = 0
         c0, c1, P_d, R_d, FF, at_rest = self.chunks.load(0)
         progress_every = max(1, N // 100)
         rec.start(q)
-        start = time.perf_counter()
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            for k in range(N):
-                if k == c1:
-                    c0, c1, P_d, R_d, FF, at_rest = self.chunks.load(k)
-                kk = k - c0
-                p_d = None if P_d is None else P_d[kk]
-                J6 = self.kinematics(q)
-                self.task_rows(J6, p_d, None if R_d is None else R_d[kk], FF[kk])
-                exact = rec.due(k)
-                r = m if crun is None else m + crun.update(k, q, self.ext, self.law, exact)
-                blocked = self.law(r, qdot)
-                err, err_rot = self.error_norms()
-                max_err = max(max_err, err)
-                stop = self.stop(k, qdot, err, r, blocked, bool(at_rest[kk]))
-                self.observe_limits(float(t[k]), q)
-                if exact or stop is not None:
-                    self.record(k, q, qdot, p_d, err, err_rot, r)
-                rec.every_sample(q, qdot)
-                steps = k + 1
-                if stop is not None:
-                    status, reason = stop
-                    break
-                if self.progress is not None and k % progress_every == 0:
-                    self.progress(k, N)
-                if k + 1 < N:
-                    np.multiply(qdot, dt, out=dq)
-                    q = pin.integrate(model, q, dq)
-        wall = time.perf_counter() - start
-        if self.progress is not None:
-            self.progress(N if status == "completed" else steps, N)
-        if status != "completed" and out_of_reach:
-            reason += f"; {out_of_reach}"
-        status, reason = self._final_status(status, reason)
-        return self._result(status, reason, wall, steps, max_err, err)
+        for k in range(N):
+            if k == c1:
+                c0, c1, P_d, R_d, FF, at_rest = self.chunks.load(k)
+            kk = k - c0
+            p_d = None if P_d is None else P_d[kk]
+            J6 = self.kinematics(q)
+            self.task_rows(J6, p_d, None if R_d is None else R_d[kk], FF[kk])
+            exact = rec.due(k)
+            r = m if crun is None else m + crun.update(k, q, self.ext, self.law, exact)
+            blocked = self.law(r, qdot)
+            self.err, err_rot = self.error_norms()
+            self.max_err = max(self.max_err, self.err)
+            stop = self.stop(k, qdot, self.err, r, blocked, bool(at_rest[kk]))
+            self.observe_limits(float(t[k]), q)
+            if exact or stop is not None:
+                self.record(k, q, qdot, p_d, self.err, err_rot, r)
+            rec.every_sample(q, qdot)
+            self.steps = k + 1
+            if stop is not None:
+                return stop
+            if self.progress is not None and k % progress_every == 0:
+                self.progress(k, N)
+            if k + 1 < N:
+                np.multiply(qdot, dt, out=dq)
+                q = pin.integrate(model, q, dq)
+        return "completed", f"reached the end of the trajectory at t = {t[-1]:.6g} s"
 
     def _final_status(self, status: str, reason: str) -> tuple[str, str]:
         """``completed`` becomes ``violated`` when a limit was crossed; skipped rows named."""
@@ -457,6 +478,7 @@ class _Run:
             "task": task.kind,
             "axes": task.axes,
             "law": tr.law,
+            "engine": tr.engine,
             "gain": [float(g) for g in tr.K_task],
             "dt": self.dt,
             "record_every": self.rec.every,
@@ -482,12 +504,12 @@ class _Run:
 
     # -- reasons -----------------------------------------------------------------------
 
-    def _active_clause(self, r: int) -> str:
+    def active_clause(self, r: int) -> str:
         if self.crun is None or r == self.task.m:
             return ""
         return f"; active constraints: {', '.join(self.crun.active_names())}"
 
-    def _deadlock_reason(self, tk: float, err: float, r: int, qdot: np.ndarray) -> str:
+    def deadlock_reason(self, tk: float, err: float, r: int, qdot: np.ndarray) -> str:
         """Remark 2, with the task rows that cannot follow and the constraints that block them."""
         ext, m = self.ext, self.task.m
         b = ext.demand(m, np.zeros(m)) if self.tr.law == "pseudoinverse" else ext.K[:m] * ext.e[:m]
@@ -539,6 +561,7 @@ def track(
     constraints: ConstraintSet | None = None,
     record_every: int = 1,
     progress: ProgressCallback | None = None,
+    engine: str = "compiled",
 ) -> TrackingResult:
     """Track a Cartesian trajectory with a CLIK law (the one-call form of :class:`Tracker`).
 
@@ -548,5 +571,7 @@ def track(
         >>> q0 = np.radians([180, -30, -90, -30])
         >>> result = clik.track(task, clik.trajectory.Line(...), q0=q0)
     """
-    tracker = Tracker(task, law=law, gain=gain, dt=dt, damping=damping, constraints=constraints)
+    tracker = Tracker(
+        task, law=law, gain=gain, dt=dt, damping=damping, constraints=constraints, engine=engine
+    )
     return tracker.run(trajectory, q0, record_every=record_every, progress=progress)

@@ -11,6 +11,7 @@ from typing import Any
 
 import pytest
 
+from clik.bench.config import QUICK
 from clik.bench.suite import REQUIRED_KEYS, run_bench
 from clik.bench.targets import default_targets_path, evaluate_targets, load_targets
 from clik.errors import InputError
@@ -20,7 +21,13 @@ CLIK = Path(__file__).resolve().parents[1] / "clik"
 HAS_PINK = importlib.util.find_spec("pink") is not None and (
     importlib.util.find_spec("daqp") is not None or importlib.util.find_spec("quadprog") is not None
 )
-PINK_KEYS = {"step_us.pink_panda_pose", "solve.pink_median_us"}
+PINK_KEYS = {
+    "step_us.pink_panda_pose",
+    "solve.pink_median_us",
+    "ratios.pink_over_panda_pose",
+    "ratios.pink_over_panda_pose_obstacles",
+    "ratios.pink_over_solve",
+}
 STEP_LINES = (
     "planar4r",
     "planar4r_case_study_both",
@@ -31,6 +38,7 @@ STEP_LINES = (
     "panda_pose_obstacles_1_active",
     "panda_pose_obstacles_transpose",
 )
+PYTHON_STEP_LINES = tuple(f"python_{name}" for name in STEP_LINES)
 
 
 def lookup(report: dict[str, Any], dotted: str) -> Any:
@@ -43,6 +51,10 @@ def lookup(report: dict[str, Any], dotted: str) -> Any:
 
 def positive(value: Any) -> bool:
     return isinstance(value, int | float) and math.isfinite(value) and value > 0
+
+
+def text_of(quick: tuple[Path, dict[str, Any]]) -> str:
+    return (quick[0] / "bench.md").read_text()
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +70,14 @@ def test_quick_run_writes_json_and_markdown(quick):
     assert report == json.loads(json.dumps(returned))
     assert report["quick"] is True
     text = (out / "bench.md").read_text()
-    for heading in ("## Step cost", "## Single-pose solve", "## Case study", "## Targets"):
+    for heading in (
+        "## Step cost",
+        "## Zoo obstacle run",
+        "## Single-pose solve",
+        "## Ratios",
+        "## Case study",
+        "## Targets",
+    ):
         assert heading in text
     for name in report["steps"]:
         assert f"| {name} |" in text
@@ -81,7 +100,7 @@ def test_every_required_key_is_present_and_sane(quick):
 
 def test_step_lines_have_medians_and_percentiles(quick):
     _, report = quick
-    for name in STEP_LINES:
+    for name in STEP_LINES + PYTHON_STEP_LINES:
         assert positive(report["step_us"][name]), name
     for name, line in report["steps"].items():
         for field in ("median_us", "p10_us", "p90_us", "realtime_factor"):
@@ -93,7 +112,61 @@ def test_step_lines_have_medians_and_percentiles(quick):
     # The obstacle variants do what their names say.
     assert report["steps"]["panda_pose_obstacles_0_active"]["active_rows_mean"] == 0.0
     assert report["steps"]["panda_pose_obstacles_1_active"]["active_rows_mean"] > 0.5
+    assert report["steps"]["python_panda_pose_obstacles_0_active"]["active_rows_mean"] == 0.0
+    assert report["steps"]["python_panda_pose_obstacles_1_active"]["active_rows_mean"] > 0.5
     assert ("pink_panda_pose" in report["steps"]) == HAS_PINK
+
+
+def test_every_clik_line_runs_in_both_engines(quick):
+    _, report = quick
+    steps = report["steps"]
+    compiled = [name for name in steps if not name.startswith(("pink_", "python_"))]
+    assert set(compiled) >= set(STEP_LINES) - {"panda_pose_obstacles"}
+    for name in compiled:
+        assert steps[name]["engine"] == "compiled", name
+        twin = steps[f"python_{name}"]
+        assert twin["engine"] == "python", name
+        assert twin["law"] == steps[name]["law"] and twin["status"] == steps[name]["status"]
+        assert twin["steps_per_run"] == steps[name]["steps_per_run"], name
+        ratio = report["ratios"]["python_over_compiled_steps"][name]
+        assert ratio == pytest.approx(twin["median_us"] / steps[name]["median_us"]), name
+    # Each step_us key is its line's median, the keys of the old report kept.
+    assert report["step_us"]["planar4r"] == steps["planar4r"]["median_us"]
+    assert report["step_us"]["panda_pose"] == steps["panda_pose"]["median_us"]
+    obstacles = steps["panda_pose_obstacles_1_active"]["median_us"]
+    assert report["step_us"]["panda_pose_obstacles"] == obstacles
+    python_pose = steps["python_panda_pose"]["median_us"]
+    assert report["step_us"]["python_panda_pose"] == python_pose
+    assert report["ratios"]["python_over_panda_pose"] == pytest.approx(
+        python_pose / steps["panda_pose"]["median_us"]
+    )
+
+
+def test_zoo_line(quick):
+    _, report = quick
+    zoo = report["zoo"]
+    assert report["step_us"]["zoo_obstacle_median"] == zoo["median_us"]
+    assert positive(zoo["median_us"])
+    assert zoo["p10_us"] <= zoo["median_us"] <= zoo["p90_us"] <= zoo["max_us"]
+    assert QUICK.zoo_robots is not None
+    assert zoo["robots_timed"] == len(zoo["per_robot"]) >= 1
+    assert zoo["robots_skipped"] == len(zoo["skipped"])
+    assert set(zoo["per_robot"]) | set(zoo["skipped"]) == set(QUICK.zoo_robots)
+    for name, robot in zoo["per_robot"].items():
+        assert positive(robot["median_us"]) and robot["steps"] >= 1, name
+        assert robot["status"] in ("completed", "deadlock", "violated"), (name, robot)
+    assert f"| {zoo['robots_timed']} |" in text_of(quick)
+
+
+def test_solve_runs_both_engines(quick):
+    _, report = quick
+    solve = report["solve"]
+    assert 0.0 <= solve["python_success_rate"] <= 1.0
+    assert positive(solve["python_median_us"])
+    assert report["ratios"]["python_over_solve"] == pytest.approx(
+        solve["python_median_us"] / solve["median_us"]
+    )
+    assert "| clik.solve, Python engine |" in text_of(quick)
 
 
 def test_case_study_memory_and_meta_sections(quick):
@@ -119,6 +192,9 @@ def test_pink_lines_and_ratios(quick):
     _, report = quick
     assert positive(report["ratios"]["pink_over_panda_pose"])
     assert positive(report["ratios"]["pink_over_panda_pose_obstacles"])
+    assert report["ratios"]["pink_over_solve"] == pytest.approx(
+        report["solve"]["pink_median_us"] / report["solve"]["median_us"]
+    )
     assert 0.0 <= report["solve"]["pink_success_rate"] <= 1.0
     assert report["pink"]["solver"] in ("daqp", "quadprog")
 
@@ -130,7 +206,15 @@ def test_targets_come_from_the_shipped_toml(quick):
     shipped = load_targets()
     assert [t["name"] for t in report["targets"]] == [t.name for t in shipped]
     assert [t["target"] for t in report["targets"]] == [t.wanted for t in shipped]
-    assert len(shipped) == 9
+    assert len(shipped) == 11
+    by_measure = {(t.measure, t.over): t for t in shipped}
+    assert by_measure[("step_us.planar4r", None)].bound == 1.5
+    assert by_measure[("step_us.zoo_obstacle_median", None)].bound == 20.0
+    assert by_measure[("step_us.panda_pose", None)].bound == 2.5
+    assert by_measure[("step_us.pink_panda_pose", "step_us.panda_pose_obstacles")].bound == 20.0
+    for t in report["targets"]:
+        if t["met"] is not None:
+            assert math.isfinite(t["value"]), t
 
 
 def test_a_targets_file_is_data(quick, tmp_path):

@@ -54,9 +54,11 @@ SHORT_CASE = (
     scenario_path("case_study_both")
     .read_text()
     .replace("dt = 0.001", "dt = 0.002")
-    .replace("gain = 1000.0", "gain = 400.0")
+    .replace("gain = 1000.0", "gain = 400.0\nengine = \"python\"")
 )
-"""The case study, both constraints, at half the samples: about 0.1 s a run.
+"""The case study, both constraints, at half the samples, on the Python engine: about
+0.1 s a run, long enough for the tests that interrupt a sweep midway (the compiled
+engine runs it in a few milliseconds).
 
 ``dt alpha = 0.8`` keeps explicit Euler stable (``dt alpha lambda_max(J_e J_e^T) < 2``)
 over the whole obstacle grid: every run of :func:`obstacle_grid` completes (at

@@ -21,6 +21,9 @@ class BenchConfig:
         sweep_runs: Runs of the timed sweep.
         sweep_repeats: Alternations of the 1- and 2-worker sweeps (median taken).
         seed: Seed of the random solve targets.
+        zoo_robots: Robots of the zoo line (None: every robot ``clik.Robot.available()``
+            lists).
+        zoo_rounds: Timed runs of each zoo robot (after one warm-up run).
     """
 
     rounds: int = 11
@@ -33,6 +36,8 @@ class BenchConfig:
     sweep_runs: int = 120
     sweep_repeats: int = 3
     seed: int = 6
+    zoo_robots: tuple[str, ...] | None = None
+    zoo_rounds: int = 5
 
 
 FULL = BenchConfig()
@@ -47,6 +52,8 @@ QUICK = BenchConfig(
     memory_record_every=100,
     sweep_runs=4,
     sweep_repeats=1,
+    zoo_robots=("planar4r", "double_pendulum_simple", "finger_edu", "ur5", "panda"),
+    zoo_rounds=1,
 )
 """Smoke settings (``--quick``): every line runs, with tiny counts, in a few seconds."""
 

@@ -46,6 +46,11 @@ def header(report: dict[str, Any]) -> list[str]:
     ]
 
 
+def _engine_of(name: str, line: dict[str, Any]) -> str:
+    """``compiled``, ``python`` or ``pink``: what ran a step line."""
+    return "pink" if name.startswith("pink_") else str(line.get("engine", "-"))
+
+
 def step_section(report: dict[str, Any]) -> list[str]:
     """The step-cost table and what each line is.
 
@@ -57,20 +62,70 @@ def step_section(report: dict[str, Any]) -> list[str]:
         f"## Step cost [us per sample] (medians over {report['config']['rounds']} interleaved "
         "rounds of whole runs)",
         "",
-        "| line | median | p10 | p90 | pink / this | real-time factor | law | status | "
-        "max task error | active rows (mean) |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| line | engine | median | p10 | p90 | pink / this | python / compiled | "
+        "real-time factor | law | status | max task error | active rows (mean) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     pink_median = report["step_us"]["pink_panda_pose"]
+    python_ratio = report["ratios"]["python_over_compiled_steps"]
     for name, s in report["steps"].items():
-        pink_ratio = None if name.startswith("pink_") else ratio(pink_median, s["median_us"])
+        engine = _engine_of(name, s)
+        pink_ratio = None if engine == "pink" else ratio(pink_median, s["median_us"])
         lines.append(
-            f"| {name} | {s['median_us']:.2f} | {s['p10_us']:.2f} | {s['p90_us']:.2f} | "
-            f"{fmt(pink_ratio)} | {s['realtime_factor']:.0f} | {s.get('law', 'pink')} | "
-            f"{s['status']} | {fmt(s['max_task_error'])} | {fmt(s.get('active_rows_mean'))} |"
+            f"| {name} | {engine} | {s['median_us']:.2f} | {s['p10_us']:.2f} | "
+            f"{s['p90_us']:.2f} | {fmt(pink_ratio)} | {fmt(python_ratio.get(name))} | "
+            f"{s['realtime_factor']:.0f} | {s.get('law', 'pink')} | {s['status']} | "
+            f"{fmt(s['max_task_error'])} | {fmt(s.get('active_rows_mean'))} |"
         )
     lines += ["", "Lines:", ""]
     lines += [f"- `{name}`: {s['description']}" for name, s in report["steps"].items()]
+    return lines
+
+
+def zoo_section(report: dict[str, Any]) -> list[str]:
+    """The zoo's obstacle run: the median over robots, how many ran, which were refused.
+
+    Args:
+        report: The report.
+    """
+    z = report["zoo"]
+    skipped = ", ".join(f"{name} ({x['refused']})" for name, x in z["skipped"].items())
+    slowest = sorted(z["per_robot"].items(), key=lambda item: -item[1]["median_us"])[:5]
+    return [
+        "",
+        f"## Zoo obstacle run [us per sample] (compiled engine, each robot's median over "
+        f"{z['rounds']} runs)",
+        "",
+        "| robots timed | median over robots | p10 | p90 | min | max | robots refused |",
+        "|---|---|---|---|---|---|---|",
+        f"| {z['robots_timed']} | {z['median_us']:.2f} | {z['p10_us']:.2f} | "
+        f"{z['p90_us']:.2f} | {z['min_us']:.2f} | {z['max_us']:.2f} | {z['robots_skipped']} |",
+        "",
+        "Slowest: "
+        + ", ".join(f"{name} {x['median_us']:.1f} ({x['status']})" for name, x in slowest)
+        + ". Refused before running: "
+        + (skipped or "none")
+        + ".",
+    ]
+
+
+def ratios_section(report: dict[str, Any]) -> list[str]:
+    """The ratios of medians: pink over clik, clik's Python engine over its compiled one.
+
+    Args:
+        report: The report.
+    """
+    r = report["ratios"]
+    rows = (
+        ("pink / compiled, Panda pose step", r["pink_over_panda_pose"]),
+        ("pink / compiled, Panda pose step with obstacles (1 row active)",
+         r["pink_over_panda_pose_obstacles"]),
+        ("python / compiled, Panda pose step", r["python_over_panda_pose"]),
+        ("pink solve / clik solve (compiled)", r["pink_over_solve"]),
+        ("python solve / compiled solve", r["python_over_solve"]),
+    )  # fmt: skip
+    lines = ["", "## Ratios (of medians)", "", "| ratio | value |", "|---|---|"]
+    lines += [f"| {name} | {fmt(value)} |" for name, value in rows]
     return lines
 
 
@@ -89,9 +144,12 @@ def solve_section(report: dict[str, Any]) -> list[str]:
         "| solver | success | median [us] | p10 [us] | p90 [us] | mean [us] | iterations "
         "(median) |",
         "|---|---|---|---|---|---|---|",
-        f"| clik.solve | {100 * sv['success_rate']:.1f} % | {sv['median_us']:.1f} | "
-        f"{sv['p10_us']:.1f} | {sv['p90_us']:.1f} | {sv['mean_us']:.1f} | "
+        f"| clik.solve, compiled engine | {100 * sv['success_rate']:.1f} % | "
+        f"{sv['median_us']:.1f} | {sv['p10_us']:.1f} | {sv['p90_us']:.1f} | {sv['mean_us']:.1f} | "
         f"{sv['iterations_median']:.0f} |",
+        f"| clik.solve, Python engine | {100 * sv['python_success_rate']:.1f} % | "
+        f"{sv['python_median_us']:.1f} | {sv['python_p10_us']:.1f} | {sv['python_p90_us']:.1f} | "
+        f"{sv['python_mean_us']:.1f} | {sv['python_iterations_median']:.0f} |",
     ]
     if sv["pink_median_us"] is not None:
         lines.append(
@@ -160,7 +218,7 @@ def targets_section(report: dict[str, Any]) -> list[str]:
 
 
 def markdown(report: dict[str, Any]) -> str:
-    """``bench.md``: the step, solve, case-study, memory and target tables.
+    """``bench.md``: the step, zoo, solve, ratio, case-study, memory and target tables.
 
     Args:
         report: The report (``bench.json``'s content).
@@ -168,7 +226,9 @@ def markdown(report: dict[str, Any]) -> str:
     lines = [
         *header(report),
         *step_section(report),
+        *zoo_section(report),
         *solve_section(report),
+        *ratios_section(report),
         *case_memory_section(report),
         *targets_section(report),
         "",

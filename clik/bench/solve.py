@@ -1,16 +1,17 @@
 """Single-pose solve: :func:`clik.solve` against pink on the same random reachable poses.
 
 The targets are the hand's poses at seeded random configurations inside the
-joint limits; both solvers start from the reference configuration and are
-checked independently of either (:mod:`clik.bench.pose_error`). clik and pink
-alternate target by target (the first of the two alternates too).
+joint limits; every solver starts from the reference configuration and is
+checked independently of any (:mod:`clik.bench.pose_error`). clik's compiled
+engine, its Python engine and pink take turns target by target (which goes
+first rotates too).
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import pinocchio as pin
@@ -26,6 +27,9 @@ from clik.bench.pose_error import (
 )
 from clik.bench.solve_pink import PinkSolve, pink_setup_text, pink_solver
 from clik.bench.stats import ratio, stats
+
+Engine = Literal["compiled", "python"]
+"""An engine of :func:`clik.solve`."""
 
 
 @dataclass
@@ -69,9 +73,9 @@ def solve_targets(robot: clik.Robot, task: clik.Task, count: int, seed: int) -> 
     return targets
 
 
-def _time_clik(s: _Solvers, target: pin.SE3, index: int, rec: _Record) -> None:
+def _time_clik(s: _Solvers, target: pin.SE3, index: int, rec: _Record, engine: Engine) -> None:
     start = time.perf_counter()
-    res = clik.solve(s.task, target)
+    res = clik.solve(s.task, target, engine=engine)
     rec.times.append(time.perf_counter() - start)
     good = within_tolerance(pose_errors(s.model, s.check, s.task.frame_id, res.q, target))
     rec.ok.append(good)
@@ -90,22 +94,33 @@ def _time_pink(s: _Solvers, pink_solve: PinkSolve, target: pin.SE3, rec: _Record
     rec.iterations.append(it)
 
 
-def _alternate(s: _Solvers, targets: list[pin.SE3], log: Log) -> tuple[_Record, _Record]:
-    """Both solvers on every target, clik first on even targets, pink first on odd ones."""
-    clik.solve(s.task, targets[0])  # warm-up
+SOLVERS = ("compiled", "python", "pink")
+"""The solvers of the benchmark: clik.solve in each engine, and pink."""
+
+
+def _alternate(s: _Solvers, targets: list[pin.SE3], log: Log) -> tuple[_Record, _Record, _Record]:
+    """Every solver on every target, the first of them rotating from target to target.
+
+    Returns:
+        The records of clik's compiled engine, of its Python engine and of pink.
+    """
+    clik.solve(s.task, targets[0], engine="compiled")  # warm-up
+    clik.solve(s.task, targets[0], engine="python")
     if s.pink_solve is not None:
         s.pink_solve(targets[0])
-    mine, theirs = _Record(), _Record()
+    records = {who: _Record() for who in SOLVERS}
     for i, target in enumerate(targets):
-        order = ("clik", "pink") if i % 2 == 0 else ("pink", "clik")
-        for who in order:
-            if who == "clik":
-                _time_clik(s, target, i, mine)
-            elif s.pink_solve is not None:
-                _time_pink(s, s.pink_solve, target, theirs)
+        shift = i % len(SOLVERS)
+        for who in SOLVERS[shift:] + SOLVERS[:shift]:
+            if who == "pink":
+                if s.pink_solve is not None:
+                    _time_pink(s, s.pink_solve, target, records[who])
+            else:
+                engine: Engine = "python" if who == "python" else "compiled"
+                _time_clik(s, target, i, records[who], engine)
         if (i + 1) % max(1, len(targets) // 4) == 0:
             log(f"  solve {i + 1}/{len(targets)}")
-    return mine, theirs
+    return records["compiled"], records["python"], records["pink"]
 
 
 def _median_us_of_successes(rec: _Record) -> float | None:
@@ -136,6 +151,19 @@ def _clik_summary(rec: _Record, config: BenchConfig, count: int) -> dict[str, An
     }
 
 
+def _python_summary(rec: _Record, clik_median_us: float) -> dict[str, Any]:
+    t_us = stats(1e6 * np.asarray(rec.times))
+    return {
+        "python_success_rate": float(np.asarray(rec.ok).mean()),
+        "python_median_us": t_us["median"],
+        "python_p10_us": t_us["p10"],
+        "python_p90_us": t_us["p90"],
+        "python_mean_us": t_us["mean"],
+        "python_iterations_median": float(np.median(rec.iterations)),
+        "python_over_compiled": ratio(t_us["median"], clik_median_us),
+    }
+
+
 def _pink_summary(
     rec: _Record, config: BenchConfig, pink: Pink, clik_median_us: float
 ) -> dict[str, Any]:
@@ -155,7 +183,7 @@ def _pink_summary(
 
 
 def bench_solve(config: BenchConfig, pink: Pink | None, log: Log) -> dict[str, Any]:
-    """clik.solve and pink to convergence on the same random poses, alternating.
+    """clik.solve (both engines) and pink to convergence on the same random poses, in turns.
 
     Args:
         config: Sizes of the suite.
@@ -164,7 +192,9 @@ def bench_solve(config: BenchConfig, pink: Pink | None, log: Log) -> dict[str, A
 
     Returns:
         Success rates (checked here, and as reported by clik), timing statistics
-        [us], iterations, and pink's figures with the speed-up when pink ran.
+        [us] and iterations of the compiled engine (unprefixed keys), of the Python
+        engine (``python_`` keys) and of pink (``pink_`` keys, with the speed-up,
+        when pink ran).
     """
     robot = clik.Robot.load("panda", lock=clik.robot.PANDA_FINGERS)
     task = clik.Task(robot, "panda_hand", "pose")
@@ -174,8 +204,9 @@ def bench_solve(config: BenchConfig, pink: Pink | None, log: Log) -> dict[str, A
     pink_solve = None
     if pink is not None:
         pink_solve = pink_solver(pink, model, task, robot.q_reference, config.pink_max_iterations)
-    mine, theirs = _alternate(_Solvers(task, model, check, pink_solve), targets, log)
+    mine, python, theirs = _alternate(_Solvers(task, model, check, pink_solve), targets, log)
     out = _clik_summary(mine, config, len(targets))
+    out.update(_python_summary(python, out["median_us"]))
     if pink is not None and theirs.times:
         out.update(_pink_summary(theirs, config, pink, out["median_us"]))
     return out

@@ -1,4 +1,8 @@
-"""The lines of the step benchmark: planar 4R, Panda pose with and without obstacles, pink."""
+"""The lines of the step benchmark: planar 4R, Panda pose with and without obstacles, pink.
+
+Every clik line runs in the compiled engine and, as its ``python_`` twin, in the
+Python one.
+"""
 
 from __future__ import annotations
 
@@ -22,6 +26,9 @@ PANDA_TRANSPOSE_GAIN = (1000.0, 1000.0, 1000.0, 400.0, 400.0, 400.0)
 """Law (9) gains of the Panda pose task [1/s], position then orientation rows.
 ``dt lambda_max(K^1/2 J J^T K^1/2)`` stays below 1.6 along the circle (explicit
 Euler is stable below 2); one gain of 1000 for all rows gives 3.3 and diverges."""
+ENGINES = ("compiled", "python")
+"""The engines every clik line runs in, in report order (the compiled line keeps the
+line's name; the Python one is prefixed ``python_``)."""
 OBSTACLE_RADIUS = 0.05
 """Radius of the three sphere obstacles [m]."""
 OBSTACLES_NONE_ACTIVE = ((0.45, 0.25, 0.55), (-0.3, 0.1, 0.75), (0.3, 0.1, 0.25))
@@ -106,7 +113,10 @@ def obstacle_set(robot: clik.Robot, centres: tuple[tuple[float, ...], ...]) -> C
 
 
 def panda_tracker(
-    panda: PandaSetup, law: PandaLaw, centres: tuple[tuple[float, ...], ...] | None = None
+    panda: PandaSetup,
+    law: PandaLaw,
+    centres: tuple[tuple[float, ...], ...] | None = None,
+    engine: str = "compiled",
 ) -> clik.Tracker:
     """A tracker of the Panda's pose task, with its own obstacle set when ``centres`` is given.
 
@@ -114,30 +124,74 @@ def panda_tracker(
         panda: The Panda setup.
         law: Law and gains.
         centres: Sphere centres [m], or None for no constraints.
+        engine: ``"compiled"`` or ``"python"``.
     """
     constraints = None if centres is None else obstacle_set(panda.robot, centres)
-    return clik.Tracker(panda.task, law=law.law, gain=law.gain, dt=DT, constraints=constraints)
+    return clik.Tracker(
+        panda.task, law=law.law, gain=law.gain, dt=DT, constraints=constraints, engine=engine
+    )
 
 
-def planar_variants(planar: Run, both: Run) -> list[Variant]:
+def engine_twin(tracker: clik.Tracker, engine: str) -> clik.Tracker:
+    """A tracker with ``tracker``'s task, law, gains, constraints and settings in ``engine``.
+
+    Args:
+        tracker: The tracker copied.
+        engine: ``"compiled"`` or ``"python"``.
+    """
+    return clik.Tracker(
+        tracker.task,
+        law=tracker.law,
+        gain=[float(g) for g in tracker.K_task],
+        dt=tracker.dt,
+        damping=tracker.damping,
+        beta_max=tracker.beta_max,
+        constraints=tracker.constraints,
+        engine=engine,
+    )
+
+
+def line_name(name: str, engine: str) -> str:
+    """The key of a clik line in ``engine``: the name, ``python_``-prefixed for that engine.
+
+    Args:
+        name: The line's name (its compiled engine's key).
+        engine: ``"compiled"`` or ``"python"``.
+    """
+    return name if engine == "compiled" else f"python_{name}"
+
+
+def _described(description: str, engine: str) -> str:
+    """A line's description, naming the engine when it is the Python one."""
+    return description if engine == "compiled" else f"Python engine: {description}"
+
+
+def planar_variants(planar: Run, both: Run, engine: str = "compiled") -> list[Variant]:
     """The planar 4R lines: the case study's line unconstrained, and its run 4.
 
     Args:
         planar: The built ``case_study_unconstrained`` scenario.
         both: The built ``case_study_both`` scenario.
+        engine: ``"compiled"`` or ``"python"``.
     """
     return [
         clik_variant(
-            "planar4r",
-            "planar 4R, position task (x, y), the case study's line, law (9), no constraints",
-            clik.Tracker(planar.task, law="transpose", gain=1000.0, dt=DT),
+            line_name("planar4r", engine),
+            _described(
+                "planar 4R, position task (x, y), the case study's line, law (9), no constraints",
+                engine,
+            ),
+            clik.Tracker(planar.task, law="transpose", gain=1000.0, dt=DT, engine=engine),
             planar.trajectory,
             planar.q0,
         ),
         clik_variant(
-            "planar4r_case_study_both",
-            "planar 4R, case study run 4 (law (9), point obstacle and joint-range rows)",
-            both.tracker,
+            line_name("planar4r_case_study_both", engine),
+            _described(
+                "planar 4R, case study run 4 (law (9), point obstacle and joint-range rows)",
+                engine,
+            ),
+            engine_twin(both.tracker, engine),
             both.trajectory,
             both.q0,
         ),
@@ -174,15 +228,20 @@ PANDA_LINES: tuple[tuple[str, str, PandaLaw, tuple[tuple[float, ...], ...] | Non
 """The Panda lines of clik: (name, description, law, sphere centres or None)."""
 
 
-def panda_variants(panda: PandaSetup) -> list[Variant]:
+def panda_variants(panda: PandaSetup, engine: str = "compiled") -> list[Variant]:
     """The Panda lines of clik (:data:`PANDA_LINES`), each with its own tracker.
 
     Args:
         panda: The Panda setup.
+        engine: ``"compiled"`` or ``"python"``.
     """
     return [
         clik_variant(
-            name, description, panda_tracker(panda, law, centres), panda.trajectory, panda.q0
+            line_name(name, engine),
+            _described(description, engine),
+            panda_tracker(panda, law, centres, engine),
+            panda.trajectory,
+            panda.q0,
         )
         for name, description, law, centres in PANDA_LINES
     ]
@@ -202,6 +261,9 @@ def pink_variants(pink: Pink, panda: PandaSetup) -> list[Variant]:
 def step_variants(config: BenchConfig, pink: Pink | None) -> list[Variant]:
     """Every line of the step benchmark, built once (robots loaded, trackers preallocated).
 
+    clik's lines in the compiled engine, then their twins in the Python engine
+    (``python_``-prefixed), then pink's.
+
     Args:
         config: Sizes of the suite.
         pink: The installed pink, or None to leave its lines out.
@@ -209,7 +271,9 @@ def step_variants(config: BenchConfig, pink: Pink | None) -> list[Variant]:
     planar = build(scenario_path("case_study_unconstrained"))
     both = build(scenario_path("case_study_both"))
     panda = panda_setup(config)
-    variants = planar_variants(planar, both) + panda_variants(panda)
+    variants: list[Variant] = []
+    for engine in ENGINES:
+        variants += planar_variants(planar, both, engine) + panda_variants(panda, engine)
     if pink is not None:
         variants += pink_variants(pink, panda)
     return variants

@@ -35,6 +35,10 @@ def clik_variant(
 ) -> Variant:
     """A line that times clik's own loop: ``tracker.run(trajectory, q0)``, wall time of the run.
 
+    The wall time is the run's ``wall_time_s``: the samples only (in the tracker's
+    engine), not the reference sampling, checks and allocations before them nor the
+    result built after them.
+
     Args:
         name: Key of the line.
         description: One sentence for ``bench.md``.
@@ -50,6 +54,7 @@ def clik_variant(
             "violations": len(result.violations),
             "max_task_error": float(result.max_task_error),
             "law": tracker.law,
+            "engine": tracker.engine,
         }
         if result.active_count is not None:
             info["active_rows_mean"] = float(np.mean(result.active_count))

@@ -23,6 +23,8 @@ from clik.bench.report import markdown
 from clik.bench.solve import bench_solve
 from clik.bench.stats import ratio
 from clik.bench.step import bench_steps
+from clik.bench.step_lines import line_name
+from clik.bench.step_zoo import bench_zoo
 from clik.bench.sweep_rate import bench_sweep
 from clik.bench.targets import evaluate_targets, load_targets
 from clik.io import write_json
@@ -31,9 +33,17 @@ REQUIRED_KEYS = (
     "step_us.planar4r",
     "step_us.panda_pose",
     "step_us.panda_pose_obstacles",
+    "step_us.python_panda_pose",
     "step_us.pink_panda_pose",
+    "step_us.zoo_obstacle_median",
+    "zoo.robots_timed",
+    "ratios.pink_over_panda_pose",
+    "ratios.pink_over_panda_pose_obstacles",
+    "ratios.python_over_panda_pose",
+    "ratios.pink_over_solve",
     "solve.success_rate",
     "solve.median_us",
+    "solve.python_median_us",
     "solve.pink_median_us",
     "case_study_all_runs_s",
     "memory_growth_mb.decimated",
@@ -43,7 +53,7 @@ REQUIRED_KEYS = (
 )
 """Dotted key paths ``bench.json`` always holds (pink's are ``null`` without pink)."""
 
-STEP_US = {
+CLIK_STEP_US = {
     "planar4r": "planar4r",
     "planar4r_case_study_both": "planar4r_case_study_both",
     "panda_pose": "panda_pose",
@@ -52,10 +62,19 @@ STEP_US = {
     "panda_pose_obstacles_0_active": "panda_pose_obstacles_0_active",
     "panda_pose_obstacles_1_active": "panda_pose_obstacles_1_active",
     "panda_pose_obstacles_transpose": "panda_pose_obstacles_transpose",
+}
+"""``bench.json``'s ``step_us`` keys of clik's compiled engine and the line each is the
+median of; ``panda_pose_obstacles`` is the line with one obstacle row active."""
+
+STEP_US = {
+    **CLIK_STEP_US,
+    **{line_name(key, "python"): line_name(line, "python") for key, line in CLIK_STEP_US.items()},
     "pink_panda_pose": "pink_panda_pose",
     "pink_panda_pose_default_limits": "pink_panda_pose_default_limits",
 }
-"""``bench.json``'s ``step_us`` keys and the step line whose median each is."""
+"""``bench.json``'s ``step_us`` keys and the step line whose median each is: clik's
+compiled engine, its Python engine's twins (``python_`` keys) and pink. The key
+``zoo_obstacle_median`` is added beside them (:func:`~clik.bench.step_zoo.bench_zoo`)."""
 
 
 @dataclass(frozen=True)
@@ -68,6 +87,7 @@ class Measured:
         case: Case study (:func:`~clik.bench.case_study.bench_case_study`).
         memory: Memory (:func:`~clik.bench.memory.bench_memory`).
         sweep: Sweep (:func:`~clik.bench.sweep_rate.bench_sweep`).
+        zoo: The zoo's obstacle run (:func:`~clik.bench.step_zoo.bench_zoo`).
     """
 
     steps: dict[str, Any]
@@ -75,6 +95,7 @@ class Measured:
     case: dict[str, Any]
     memory: dict[str, Any]
     sweep: dict[str, Any]
+    zoo: dict[str, Any]
 
 
 def measure(config: BenchConfig, pink: Pink | None, say: Log) -> Measured:
@@ -87,6 +108,8 @@ def measure(config: BenchConfig, pink: Pink | None, say: Log) -> Measured:
     """
     say("step cost (interleaved rounds)")
     steps = bench_steps(config, pink, say)
+    say("step cost of the zoo's obstacle run, robot by robot")
+    zoo = bench_zoo(config, say)
     say("single-pose solve")
     solve = bench_solve(config, pink, say)
     say("case study")
@@ -95,7 +118,37 @@ def measure(config: BenchConfig, pink: Pink | None, say: Log) -> Measured:
     memory = bench_memory(config, say)
     say("sweep on a local Dask cluster, 1 and 2 workers")
     sweep = bench_sweep(config, say)
-    return Measured(steps, solve, case, memory, sweep)
+    return Measured(steps, solve, case, memory, sweep, zoo)
+
+
+def step_ratios(m: Measured) -> dict[str, Any]:
+    """Ratios of medians: pink over clik's compiled engine, clik's Python engine over it.
+
+    Args:
+        m: What the measurements returned.
+
+    Returns:
+        Ratios of step medians (Panda pose, Panda pose with one obstacle row active)
+        and of solve medians; ``python_over_compiled_steps`` holds every clik line's.
+        A ratio is None when a figure is missing (pink not installed).
+    """
+
+    def median(name: str) -> float | None:
+        return m.steps[name]["median_us"] if name in m.steps else None
+
+    return {
+        "pink_over_panda_pose": ratio(median("pink_panda_pose"), median("panda_pose")),
+        "pink_over_panda_pose_obstacles": ratio(
+            median("pink_panda_pose"), median("panda_pose_obstacles_1_active")
+        ),
+        "python_over_panda_pose": ratio(median("python_panda_pose"), median("panda_pose")),
+        "pink_over_solve": m.solve.get("speedup_vs_pink"),
+        "python_over_solve": m.solve.get("python_over_compiled"),
+        "python_over_compiled_steps": {
+            line: ratio(median(line_name(line, "python")), median(line))
+            for line in dict.fromkeys(CLIK_STEP_US.values())
+        },
+    }
 
 
 def figures(config: BenchConfig, m: Measured) -> dict[str, Any]:
@@ -105,21 +158,17 @@ def figures(config: BenchConfig, m: Measured) -> dict[str, Any]:
         config: Sizes of the suite.
         m: What the measurements returned.
     """
-
-    def median(name: str) -> float | None:
-        return m.steps[name]["median_us"] if name in m.steps else None
-
+    step_us = {
+        key: m.steps[line]["median_us"] if line in m.steps else None
+        for key, line in STEP_US.items()
+    }
+    step_us["zoo_obstacle_median"] = m.zoo["median_us"]
     obstacles = m.steps["panda_pose_obstacles_1_active"]
     return {
-        "step_us": {key: median(line) for key, line in STEP_US.items()},
+        "step_us": step_us,
         "steps": m.steps,
-        "ratios": {
-            "pink_over_panda_pose": ratio(median("pink_panda_pose"), median("panda_pose")),
-            "pink_over_panda_pose_obstacles": ratio(
-                median("pink_panda_pose"), median("panda_pose_obstacles_1_active")
-            ),
-            "pink_over_solve": m.solve.get("speedup_vs_pink"),
-        },
+        "zoo": m.zoo,
+        "ratios": step_ratios(m),
         "solve": m.solve,
         "case_study_all_runs_s": m.case["all_runs_s"],
         "case_study": m.case,

@@ -444,18 +444,7 @@ class ConstraintRun:
         result.events = list(self.events)
         names = sorted(self.codes, key=self.codes.__getitem__)
         result.info["constraint_names"] = names
-        result.info["obstacles"] = [
-            {
-                "name": o.name,
-                "shape": o.shape,
-                "position": o.position.tolist(),
-                "rpy": o.rpy.tolist(),
-                "velocity": o.velocity.tolist(),
-                "threshold": float(cset.obs_threshold[i]),
-                **o.params,
-            }
-            for i, o in enumerate(cset.obstacles)
-        ]
+        result.info["obstacles"] = cset.obstacle_info()
         result.info["links"] = cset.link_labels
         result.extra["active"] = self.rec_active[:n_rec]
         result.extra["witness"] = self.rec_witness[:n_rec]
@@ -481,12 +470,5 @@ class ConstraintRun:
                 name: float(self.run_min_t[i]) for i, name in by_name
             }
         if cset.joint_limits is not None:
-            jl = cset.joint_limits
-            extra["joint_limits_used"] = {
-                "lower": jl.lower.tolist(),
-                "upper": jl.upper.tolist(),
-                "threshold": jl.threshold.tolist(),
-                "q_index": [int(i) for i in jl.q_index],
-                "joint_names": list(jl.joint_names),
-            }
+            extra["joint_limits_used"] = cset.joint_limits_used()
         result.info["summary_extra"] = extra

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -224,3 +224,31 @@ class ConstraintSet:
                 "smaller task mask",
             )
         return limit
+
+    def obstacle_info(self) -> list[dict[str, Any]]:
+        """Each obstacle as a run's ``info["obstacles"]`` lists it (threshold included)."""
+        return [
+            {
+                "name": o.name,
+                "shape": o.shape,
+                "position": o.position.tolist(),
+                "rpy": o.rpy.tolist(),
+                "velocity": o.velocity.tolist(),
+                "threshold": float(self.obs_threshold[i]),
+                **o.params,
+            }
+            for i, o in enumerate(self.obstacles)
+        ]
+
+    def joint_limits_used(self) -> dict[str, Any] | None:
+        """The joint-range rows' limits and thresholds, as a run's summary reports them."""
+        jl = self.joint_limits
+        if jl is None:
+            return None
+        return {
+            "lower": jl.lower.tolist(),
+            "upper": jl.upper.tolist(),
+            "threshold": jl.threshold.tolist(),
+            "q_index": [int(i) for i in jl.q_index],
+            "joint_names": list(jl.joint_names),
+        }

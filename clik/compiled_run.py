@@ -1,0 +1,187 @@
+"""The samples of a tracking run in the compiled engine (``clik._engine``).
+
+:meth:`clik.tracking._Run.samples` is the specification: the same steps, one
+sample at a time, in Python. Here Python samples the reference in chunks and
+hands each chunk to the engine, which runs its samples and writes the record in
+place into the run's :class:`~clik.recording.Recorder`; the reasons of a stop are
+then written in words by the same Python code as the specification's.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Protocol
+
+import numpy as np
+
+from clik.engine import load
+from clik.stop_checks import instability_reason, joint_step_reason, non_finite_reason
+from clik.violations import ViolationRecord
+
+if TYPE_CHECKING:
+    from clik.constraints import ConstraintSet
+    from clik.extended_task import ExtendedTask
+    from clik.result import TrackingResult
+    from clik.recording import Recorder
+    from clik.reference_stream import ReferenceChunks
+    from clik.robot import Robot
+    from clik.stop_checks import StopChecks
+    from clik.task import Task
+    from clik.violations import ViolationMonitor
+
+
+class RunState(Protocol):
+    """What a run (:class:`clik.tracking._Run`) shows the compiled engine."""
+
+    robot: Robot
+    task: Task
+    tr: Any
+    t: np.ndarray
+    N: int
+    chunks: ReferenceChunks
+    rec: Recorder
+    ext: ExtendedTask
+    checks: StopChecks
+    monitor: ViolationMonitor
+    crun: Any
+    progress: Any
+    steps: int
+    max_err: float
+    err: float
+
+    def active_clause(self, r: int) -> str: ...  # noqa: D102
+
+    def deadlock_reason(self, tk: float, err: float, r: int, qdot: np.ndarray) -> str: ...  # noqa: D102
+
+    def stall_reason(self, tk: float, err: float, r: int, qdot: np.ndarray) -> str: ...  # noqa: D102
+
+
+def compiled_samples(run: RunState, q: np.ndarray) -> tuple[str, str]:
+    """Run every sample of ``run`` from ``q`` in the engine; returns the status and reason.
+
+    Sets ``run.steps``, ``run.max_err`` and ``run.err``, the record, the violations
+    and the stability margin, as :meth:`clik.tracking._Run.samples` does.
+    """
+    native = _engine_run(run)
+    q = np.array(q, dtype=float)
+    N = run.N
+    tick = max(1, N // 100) if run.progress is not None else N
+    k = 0
+    stop: tuple[Any, ...] = ("",)
+    while k < N:
+        c0, c1, P_d, R_d, FF, at_rest = run.chunks.load(k - k % run.chunks.size)
+        end = min(c1, (k // tick + 1) * tick)
+        stop = native.advance(
+            k, end, _rows(P_d, k - c0, end - c0), _rows(R_d, k - c0, end - c0),
+            _rows(FF, k - c0, end - c0), _rows(at_rest, k - c0, end - c0), q,
+        )  # fmt: skip
+        k = stop[0]
+        if stop[1]:
+            break
+        if run.progress is not None and k < N:
+            run.progress(k, N)
+    run.steps, run.max_err, run.err = native.steps, native.max_error, native.last_error
+    run.rec.j = native.kept
+    run.checks.worst_margin = native.worst_margin
+    for constraint, kind, t_first, t_last, worst in native.violations:
+        record = ViolationRecord(constraint, kind, t_first, worst)
+        record.t_last = t_last
+        run.monitor.records[constraint] = record
+    if run.tr.constraints is not None:
+        run.crun = CompiledConstraints(run.tr.constraints, native.constraint_records())
+    if not stop[1]:
+        return "completed", f"reached the end of the trajectory at t = {run.t[-1]:.6g} s"
+    return _stopped(run, native, stop)
+
+
+def _rows(array: np.ndarray | None, a: int, b: int) -> np.ndarray | None:
+    """Rows ``a:b`` of a chunk array, contiguous (the engine reads raw memory)."""
+    return None if array is None else np.ascontiguousarray(array[a:b])
+
+
+def _engine_run(run: RunState) -> Any:
+    """The engine's run, on the run's robot, task, law, checks and record."""
+    tr, task, s = run.tr, run.task, run.checks.s
+    joints = run.monitor.joints
+    return load().TrackingRun(
+        run.robot.model, task.frame_id, [int(r) for r in task.rows], task.has_position,
+        task.has_orientation, tr.law, tr.damping, tr.dt, tr.beta_max,
+        np.asarray(tr.K_task, dtype=float), tr.rows,
+        (s.deadlock_window, s.deadlock_ratio, s.deadlock_error, s.max_joint_step,
+         s.stall_window, s.stall_progress),
+        run.t, run.rec, [int(i) for i in joints.index], joints.lower, joints.upper,
+        list(joints.names), tr.constraints, tr.alpha,
+    )  # fmt: skip
+
+
+def _stopped(run: RunState, native: Any, stop: tuple[Any, ...]) -> tuple[str, str]:
+    """The status and reason of a run the engine stopped at sample ``k``."""
+    _, why, k, r, err = stop
+    tk = float(run.t[k])
+    ext = run.ext
+    ext.J[:], ext.e[:], ext.K[:], ext.ff[:] = native.ext_J, native.ext_e, native.ext_K, native.ext_ff
+    qdot = native.qdot
+    if why == "non_finite":
+        return "diverged", non_finite_reason(tk) + run.active_clause(r)
+    if why == "joint_step":
+        reason = joint_step_reason(tk, native.jump, err, run.checks.s.max_joint_step)
+        return "diverged", reason + run.active_clause(r)
+    if why == "unstable":
+        return "diverged", instability_reason(run.tr.law, native.margin, err) + run.active_clause(r)
+    if why == "deadlock":
+        return "deadlock", run.deadlock_reason(tk, err, r, qdot)
+    return "deadlock", run.stall_reason(tk, err, r, qdot)
+
+
+class _Active:
+    """An active constraint, by name (what the reasons of a stop read)."""
+
+    def __init__(self, key: str) -> None:
+        self.key = key
+
+
+class CompiledConstraints:
+    """The end of a compiled run's constraints, as :class:`ConstraintRun` shows it.
+
+    Args:
+        cset: The run's constraint set.
+        records: What the engine's constraint run recorded (``constraint_records``).
+    """
+
+    def __init__(self, cset: ConstraintSet, records: dict[str, Any]) -> None:
+        self.cset, self.records = cset, records
+        self.limit: int = records["limit"]
+
+    def active_names(self) -> list[str]:
+        """Names of the constraints active when the run ended, in row order."""
+        return list(self.records["active_names"])
+
+    def active_rows(self) -> list[_Active]:
+        """The active constraints, in row order."""
+        return [_Active(name) for name in self.records["active_names"]]
+
+    def skipped_names(self) -> list[str]:
+        """Constraints that were violated but found no free row."""
+        return list(self.records["skipped"])
+
+    def finish(self, result: TrackingResult, n_rec: int) -> None:
+        """Move the run's records into the result, as ``ConstraintRun.finish`` does."""
+        cset, rec = self.cset, self.records
+        result.events = list(rec["events"])
+        result.info["constraint_names"] = list(rec["constraint_names"])
+        result.info["obstacles"] = cset.obstacle_info()
+        result.info["links"] = cset.link_labels
+        result.extra["active"] = rec["active"][:n_rec]
+        result.extra["witness"] = rec["witness"][:n_rec]
+        extra: dict[str, Any] = {
+            "min_obstacle_distance": rec["min_obstacle_distance"],
+            "min_obstacle_distance_by_obstacle": {},
+        }
+        if cset.obstacles:
+            result.extra["obstacle_distance"] = rec["obstacle_distance"][:n_rec]
+            result.extra["obstacle_link"] = rec["obstacle_link"][:n_rec]
+            for key in ("", "_link", "_exact", "_time"):
+                name = f"min_obstacle_distance{key}_by_obstacle"
+                extra[name] = dict(rec[name])
+        if cset.joint_limits is not None:
+            extra["joint_limits_used"] = cset.joint_limits_used()
+        result.info["summary_extra"] = extra

@@ -1,0 +1,28 @@
+// What the tracking loop asks of a run's constraints (constraints/): their
+// rows for this sample, the penetrations they saw, what they record. Kept
+// apart so that tracking.cpp does not depend on the constraint room's insides.
+#pragma once
+
+#include <pinocchio/multibody/data.hpp>
+#include <pinocchio/multibody/model.hpp>
+
+#include "extended_task.hpp"
+#include "laws.hpp"
+#include "recording.hpp"
+#include "violations.hpp"
+
+namespace clik {
+
+class ConstraintRun;
+
+// Rows of the active constraints written after the task rows; their count.
+int update_constraints(ConstraintRun& crun, long k, const Vec& q, const pinocchio::Model& model,
+                       pinocchio::Data& data, ExtendedTask& ext, Law& law, bool exact);
+
+// Every link inside an obstacle or another link at this sample, to the monitor.
+void observe_penetrations(ConstraintRun& crun, double tk, ViolationMonitor& monitor);
+
+// The constraint columns of recorded sample j (active rows, minimum distance, ...).
+void record_constraints(ConstraintRun& crun, Recorder& rec, long j, int active);
+
+}  // namespace clik

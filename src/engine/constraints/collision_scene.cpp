@@ -1,0 +1,102 @@
+// Per-sample collision queries: see collision_scene.hpp and
+// clik/constraints/collision_scene.py. The only translation unit of the
+// constraints that includes Pinocchio's collision algorithms (coal).
+#include "constraints/collision_scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <pinocchio/algorithm/geometry.hpp>
+#include <pinocchio/collision/distance.hpp>
+
+namespace clik {
+
+void SceneConfig::bounding_spheres() {
+  joints.assign(link_joint.begin(), link_joint.end());
+  std::sort(joints.begin(), joints.end());
+  joints.erase(std::unique(joints.begin(), joints.end()), joints.end());
+  joint_radius = Vec::Constant(static_cast<Eigen::Index>(joints.size()), -INFINITY);
+  link_slot.assign(link_joint.size(), -1);
+  for (int i = 0; i < n_links; ++i) {
+    const auto s = std::lower_bound(joints.begin(), joints.end(), link_joint[i]) - joints.begin();
+    link_slot[i] = static_cast<int>(s);
+    joint_radius[s] = std::max(joint_radius[s], local_radius[i]);
+  }
+}
+
+Mat motion_bounds(const pinocchio::Model& model, const SceneConfig& scene) {
+  std::vector<double> offset(model.njoints);
+  for (int j = 0; j < model.njoints; ++j) {
+    const Vec3& p = model.jointPlacements[j].translation();
+    offset[j] = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+  }
+  Mat rho = Mat::Zero(scene.n_links, model.nv);
+  for (int i = 0; i < scene.n_links; ++i) {
+    int j = scene.link_joint[i];
+    double length = 0.0;
+    while (j > 0) {
+      const auto& joint = model.joints[j];
+      const double arm = length + scene.local_radius[i];
+      double bound;
+      if (joint.nv() > 1) {  // planar, spherical, free-flyer: rotations and translations
+        bound = arm + 1.0;
+      } else if (joint.shortname().rfind("JointModelP", 0) == 0) {  // prismatic
+        bound = 1.0;
+      } else {  // revolute
+        bound = arm;
+      }
+      rho.block(i, joint.idx_v(), 1, joint.nv()).setConstant(bound);
+      length += offset[j];
+      j = static_cast<int>(model.parents[j]);
+    }
+  }
+  return rho;
+}
+
+CollisionScene::CollisionScene(const SceneConfig& scene,
+                               const std::vector<ObstacleConfig>& obstacles)
+    : scene_(&scene), obstacles_(&obstacles), gdata_(*scene.gmodel),
+      joint_pos_(static_cast<Eigen::Index>(scene.joints.size()), 3) {
+  for (auto& request : gdata_.distanceRequests) {
+    // GJK's default 1e-6 m tolerance makes hull-hull witness points jitter by that
+    // much between samples; rows are derivatives, so ask for 1e-9 m.
+    request.gjk_tolerance = GJK_TOLERANCE;
+    request.epa_tolerance = GJK_TOLERANCE;
+  }
+  for (int o = 0; o < static_cast<int>(obstacles.size()); ++o) {
+    if (obstacles[o].moving()) moving_.push_back(o);
+  }
+  joint_pos_.setZero();
+}
+
+void CollisionScene::place_geometries(const pinocchio::Model& model, const pinocchio::Data& data,
+                                      double t) {
+  pinocchio::updateGeometryPlacements(model, data, *scene_->gmodel, gdata_);
+  // A world-attached geometry's oMg is its placement (updateGeometryPlacements).
+  for (int o : moving_) {
+    const ObstacleConfig& ob = (*obstacles_)[o];
+    gdata_.oMg[ob.geometry] = ob.placement(t);
+  }
+}
+
+const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& CollisionScene::place_joints(
+    const pinocchio::Data& data) {
+  const auto& joints = scene_->joints;
+  for (size_t s = 0; s < joints.size(); ++s) {
+    joint_pos_.row(static_cast<Eigen::Index>(s)) = data.oMi[joints[s]].translation().transpose();
+  }
+  return joint_pos_;
+}
+
+void CollisionScene::distance(int pair, PairDistance& out) {
+  const coal::DistanceResult& res =
+      pinocchio::computeDistance(*scene_->gmodel, gdata_, static_cast<pinocchio::PairIndex>(pair));
+  out.distance = res.min_distance;
+  out.point_a = res.nearest_points[0];
+  out.point_b = res.nearest_points[1];
+  out.normal = res.normal;
+}
+
+}  // namespace clik

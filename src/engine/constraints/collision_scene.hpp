@@ -1,0 +1,87 @@
+// The robot's link geometry and the obstacles in one Pinocchio GeometryModel
+// (mirrors the per-sample parts of clik/constraints/collision_scene.py).
+//
+// The GeometryModel is the very one the Python CollisionScene built
+// (ConstraintSet.scene.gmodel), borrowed, never copied or changed: links first,
+// then obstacles; one collision pair per (link, obstacle), then the link-link
+// pairs. Each run owns a CollisionScene: its own GeometryData (coal's distance
+// requests at GJK_TOLERANCE, as the Python side) and the joints' sphere centres.
+// A moving obstacle's placement at time t is written into this GeometryData's
+// oMg, not into the shared model.
+#pragma once
+
+#include <vector>
+
+#include <pinocchio/multibody/data.hpp>
+#include <pinocchio/multibody/geometry.hpp>
+#include <pinocchio/multibody/model.hpp>
+
+#include "constraints/obstacle.hpp"
+#include "types.hpp"
+
+namespace clik {
+
+// Tolerance of coal's GJK/EPA for link-obstacle and link-link distances [m]
+// (collision_scene.GJK_TOLERANCE).
+constexpr double GJK_TOLERANCE = 1e-9;
+
+// What the Python CollisionScene decided once (read by ConstraintConfig's binding).
+struct SceneConfig {
+  const pinocchio::GeometryModel* gmodel = nullptr;  // borrowed (ConstraintConfig::owner)
+  int n_links = 0;
+  std::vector<int> link_joint;   // parent joint of each link geometry
+  Vec local_radius;              // bounding radius of each link geometry about its joint [m]
+  Eigen::MatrixXi obstacle_pairs;  // pair index of (link geometry i, obstacle o): (n_links, n_obs)
+  struct SelfPair {
+    int pair;  // collision pair index
+    int a, b;  // link geometries
+  };
+  std::vector<SelfPair> self_pairs;
+  std::vector<int> joints;       // joints with link geometry (sorted): bounding-sphere centres
+  Vec joint_radius;              // radius of each such joint's bounding sphere [m]
+  std::vector<int> link_slot;    // index in `joints` of each link geometry's joint
+
+  // joints, joint_radius and link_slot from link_joint and local_radius
+  // (CollisionScene._bounding_spheres).
+  void bounding_spheres();
+};
+
+// rho (n_links, nv): |pdot| <= rho_i . |qdot| for any point of link geometry i
+// (CollisionScene.motion_bounds): the chain of joint offsets from joint j to i's
+// joint plus the geometry's radius; 1 for a prismatic joint; arm + 1 for a
+// joint of more than one DOF; 0 for a joint that does not move link i.
+Mat motion_bounds(const pinocchio::Model& model, const SceneConfig& scene);
+
+// Signed distance of a pair, witness points (first on the link) and coal's normal.
+struct PairDistance {
+  double distance = 0.0;
+  Vec3 point_a = Vec3::Zero();
+  Vec3 point_b = Vec3::Zero();
+  Vec3 normal = Vec3::Zero();
+};
+
+class CollisionScene {
+ public:
+  CollisionScene(const SceneConfig& scene, const std::vector<ObstacleConfig>& obstacles);
+
+  // Place every geometry at data.oMi (one pass) and the moving obstacles at time t [s].
+  void place_geometries(const pinocchio::Model& model, const pinocchio::Data& data, double t);
+
+  // Joint origins (n_joints, 3) [m] from data.oMi: bounding-sphere centres.
+  const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& place_joints(
+      const pinocchio::Data& data);
+
+  // Distance of collision pair `pair` at the current placements.
+  void distance(int pair, PairDistance& out);
+
+  const SceneConfig& config() const { return *scene_; }
+
+ private:
+  const SceneConfig* scene_;
+  const std::vector<ObstacleConfig>* obstacles_;
+  std::vector<int> moving_;  // obstacles with a velocity
+  pinocchio::GeometryData gdata_;
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> joint_pos_;
+};
+
+}  // namespace clik

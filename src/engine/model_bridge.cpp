@@ -1,0 +1,30 @@
+#include "model_bridge.hpp"
+
+#include <boost/python.hpp>
+
+#include <stdexcept>
+
+namespace clik {
+
+namespace {
+
+template <typename T>
+T& borrow(PyObject* obj, const char* what) {
+  namespace bp = boost::python;
+  bp::object handle{bp::handle<>(bp::borrowed(obj))};
+  bp::extract<T&> extracted(handle);
+  if (!extracted.check()) {
+    throw std::invalid_argument(std::string("expected a ") + what);
+  }
+  return extracted();
+}
+
+}  // namespace
+
+pinocchio::Model& borrow_model(PyObject* obj) { return borrow<pinocchio::Model>(obj, "pin.Model"); }
+
+pinocchio::GeometryModel& borrow_geometry_model(PyObject* obj) {
+  return borrow<pinocchio::GeometryModel>(obj, "pin.GeometryModel");
+}
+
+}  // namespace clik
