@@ -4,7 +4,9 @@ A trajectory is sampled vectorised over a block of the time grid at a time
 (:data:`REFERENCE_CHUNK` samples), so a 10^6-sample run holds a few hundred
 kilobytes of reference instead of hundreds of megabytes. Every chunk is
 sampled once before the loop starts, so a trajectory that yields NaN or lacks
-what the task needs is refused before any computation.
+what the task needs is refused before any computation; a run of at most
+:data:`KEEP_SAMPLES` samples keeps those chunks for the loop instead of sampling
+them again.
 """
 
 from __future__ import annotations
@@ -17,6 +19,9 @@ from clik.trajectory import Reference, Trajectory
 
 REFERENCE_CHUNK = 4096
 """Samples per chunk of reference."""
+
+KEEP_SAMPLES = 65536
+"""Runs up to this many samples keep their sampled reference (about 10 MB for a pose task)."""
 
 Chunk = tuple[int, int, np.ndarray | None, np.ndarray | None, np.ndarray, np.ndarray]
 
@@ -62,9 +67,13 @@ class ReferenceChunks:
         self.center = center
         self.farthest = (0.0, 0.0)
         """Largest distance [m] of the position reference from ``center``, and its time [s]."""
+        self._kept: dict[int, Chunk] = {}
+        keep = t.shape[0] <= KEEP_SAMPLES
         self._first = self._sample(0)
         for c0 in range(size, t.shape[0], size):  # validate the rest before any step
-            self._sample(c0)
+            chunk = self._sample(c0)
+            if keep:
+                self._kept[c0] = chunk
 
     def _sample(self, c0: int) -> Chunk:
         c1 = min(c0 + self.size, self.t.shape[0])
@@ -81,4 +90,5 @@ class ReferenceChunks:
         """The chunk starting at sample ``c0``: ``(c0, c1, P_d, R_d, FF, at_rest)``."""
         if c0 == 0:
             return self._first
-        return self._sample(c0)
+        kept = self._kept.get(c0)
+        return kept if kept is not None else self._sample(c0)

@@ -10,7 +10,7 @@ namespace clik {
 Law::Law(const LawSettings& settings, int rows, int nv)
     : s_(settings), b_(rows), work_(rows), jte_(nv), qdot_c_(nv), qdot_t_(nv), rest_(rows),
       y_(rows), w_(rows), gain_(rows), tmp_(rows), C_(rows, nv), JN_(rows, nv), A_(rows, rows),
-      P_(nv, nv), eig_(rows), svd_(rows, nv, Eigen::ComputeThinU | Eigen::ComputeThinV) {}
+      P_(nv, nv), M_(rows, rows), eig_(rows), llt_(rows), svd_(rows, nv, Eigen::ComputeThinU | Eigen::ComputeThinV) {}
 
 double Law::velocity(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot) {
   const auto J = ext.J.topRows(r);
@@ -40,13 +40,31 @@ double Law::velocity(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot) {
 
 void Law::damped_solve(const Eigen::MatrixXd& A, const Vec& b, double epsilon, Vec& y) {
   // y = V diag(1 / (max(w_i, eps^2) + lambda_0^2)) V^T b, A = V diag(w) V^T
+  const Eigen::Index n = A.rows();
+  const double eps2 = epsilon * epsilon, d2 = s_.damping * s_.damping;
+  // Regular case first: A - eps^2 I positive definite means no w_i is below eps^2,
+  // and the filter is then exactly (A + lambda_0^2 I)^-1 (two small Cholesky
+  // factorisations instead of an eigendecomposition).
+  M_.resize(n, n);
+  M_ = A;
+  M_.diagonal().array() -= eps2;
+  llt_.compute(M_);
+  if (llt_.info() == Eigen::Success) {
+    M_ = A;
+    M_.diagonal().array() += d2;
+    llt_.compute(M_);
+    if (llt_.info() == Eigen::Success) {
+      y.head(n) = b.head(n);
+      llt_.solveInPlace(y.head(n));
+      return;
+    }
+  }
   eig_.compute(A);
   const auto& V = eig_.eigenvectors();
   Vec& w = w_;
-  const Eigen::Index n = A.rows();
   w.head(n) = eig_.eigenvalues();
   for (Eigen::Index i = 0; i < n; ++i) {
-    double wi = std::max(w[i], epsilon * epsilon) + s_.damping * s_.damping;
+    double wi = std::max(w[i], eps2) + d2;
     w[i] = wi > 0.0 ? wi : std::numeric_limits<double>::infinity();
   }
   tmp_.head(n).noalias() = V.transpose() * b.head(n);

@@ -3,6 +3,7 @@
 // construction: velocity() allocates nothing.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 
@@ -42,8 +43,9 @@ class Law {
 
   LawSettings s_;
   Vec b_, work_, jte_, qdot_c_, qdot_t_, rest_, y_, w_, gain_, tmp_;
-  Eigen::MatrixXd C_, JN_, A_, P_;
+  Eigen::MatrixXd C_, JN_, A_, P_, M_;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig_;
+  Eigen::LLT<Eigen::MatrixXd> llt_;
   Eigen::JacobiSVD<Eigen::MatrixXd> svd_;
 };
 
