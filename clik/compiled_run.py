@@ -20,9 +20,9 @@ from clik.violations import ViolationRecord
 if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
     from clik.extended_task import ExtendedTask
-    from clik.result import TrackingResult
     from clik.recording import Recorder
     from clik.reference_stream import ReferenceChunks
+    from clik.result import TrackingResult
     from clik.robot import Robot
     from clik.stop_checks import StopChecks
     from clik.task import Task
@@ -118,7 +118,8 @@ def _stopped(run: RunState, native: Any, stop: tuple[Any, ...]) -> tuple[str, st
     _, why, k, r, err = stop
     tk = float(run.t[k])
     ext = run.ext
-    ext.J[:], ext.e[:], ext.K[:], ext.ff[:] = native.ext_J, native.ext_e, native.ext_K, native.ext_ff
+    ext.J[:], ext.e[:] = native.ext_J, native.ext_e
+    ext.K[:], ext.ff[:] = native.ext_K, native.ext_ff
     qdot = native.qdot
     if why == "non_finite":
         return "diverged", non_finite_reason(tk) + run.active_clause(r)

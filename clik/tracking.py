@@ -23,8 +23,8 @@ import pinocchio as pin
 
 from clik.bounds import MAX_STEPS
 from clik.compiled_run import compiled_samples
-from clik.engine import ENGINES
 from clik.constraints.constraint_run import ConstraintRun
+from clik.engine import ENGINES
 from clik.errors import InputError
 from clik.extended_task import ExtendedTask
 from clik.gains import row_gains, stability_margin

@@ -509,7 +509,10 @@ SCENARIO = [
         lambda env: build(env.scenario("dt = 0.001", "dt = 0.001\nsubsteps = 3")),
         Raises(
             ScenarioError,
-            ["solver.substeps: unknown key; valid keys here: damping, dt, engine, gain, law, record_every"],
+            [
+                "solver.substeps: unknown key; valid keys here: damping, dt, engine, gain, law, "
+                "record_every"
+            ],
         ),
         id="scenario-unknown-key",
     ),

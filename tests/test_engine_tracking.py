@@ -329,3 +329,20 @@ def test_panda_obstacle_conflict_ends_alike(panda):
     a, b = runs
     assert a.events
     assert_same(a, b)
+
+
+def test_cli_and_scenario_choose_the_engine(tmp_path):
+    import json
+
+    from clik.cli import main
+    from clik.scenarios import scenario_path
+
+    text = scenario_path("case_study_both").read_text()
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(text.replace("dt = 0.001", 'dt = 0.001\nengine = "python"'))
+    for args, expected in (([], "python"), (["--engine", "compiled"], "compiled")):
+        out = tmp_path / f"out_{expected}"
+        assert main(["solve", str(scenario), "--out", str(out), "--quiet", *args]) == 0
+        assert json.loads((out / "summary.json").read_text())["info"]["engine"] == expected
+    scenario.write_text(text.replace("dt = 0.001", 'dt = 0.001\nengine = "gpu"'))
+    assert main(["solve", str(scenario), "--out", str(tmp_path / "bad"), "--quiet"]) == 2

@@ -54,7 +54,7 @@ SHORT_CASE = (
     scenario_path("case_study_both")
     .read_text()
     .replace("dt = 0.001", "dt = 0.002")
-    .replace("gain = 1000.0", "gain = 400.0\nengine = \"python\"")
+    .replace("gain = 1000.0", 'gain = 400.0\nengine = "python"')
 )
 """The case study, both constraints, at half the samples, on the Python engine: about
 0.1 s a run, long enough for the tests that interrupt a sweep midway (the compiled
