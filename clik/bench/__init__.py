@@ -5,7 +5,9 @@ What is measured (all through clik's public API, on the machine it runs on):
 - **Step cost** [us per sample] (:mod:`clik.bench.step`): whole runs of
   :meth:`clik.Tracker.run`, ``result.wall_time_s / result.steps`` (the loop's own
   cost: kinematics, law, constraints, recording; the trajectory is sampled before
-  the clock starts). Lines (:mod:`clik.bench.step_lines`): the planar 4R arm on the
+  the clock starts). Every clik line runs in the compiled engine (``clik._engine``,
+  the line's own key) and in the Python one (its ``python_`` twin), interleaved
+  with the others. Lines (:mod:`clik.bench.step_lines`): the planar 4R arm on the
   case study's line (law (9)); the Panda's pose task on the shipped circle
   (``panda_circle``) with law (10) and with law (9) (per-row gains inside the
   explicit-Euler bound); the same with three sphere obstacles against every link's
@@ -13,12 +15,16 @@ What is measured (all through clik's public API, on the machine it runs on):
   obstacle row, or one, is active; and pink's step (:mod:`clik.bench.step_pink`:
   ``FrameTask`` + ``PostureTask``, ``ConfigurationLimit``, ``solve_ik`` +
   ``integrate_inplace``) on the same model and reference.
+- **Zoo obstacle run** [us per sample] (:mod:`clik.bench.step_zoo`): the zoo test's
+  run (:mod:`clik.bench.zoo`: every robot, a 5 cm line toward a 3 cm sphere, law (10),
+  joint-range rows) in the compiled engine, robot by robot; the median over robots
+  (robots refused before running are skipped and counted).
 - **Single-pose solve** (:mod:`clik.bench.solve`): seeded random reachable Panda
   poses (forward kinematics of random configurations inside the limits), from the
   reference configuration, tolerance 1e-4 m and 1e-3 rad, checked independently of
-  each solver (``|p_d - p|`` and ``|log3(R_d R^T)|``): :func:`clik.solve` against
-  pink iterated to convergence (capped, :mod:`clik.bench.solve_pink`) on the same
-  targets.
+  each solver (``|p_d - p|`` and ``|log3(R_d R^T)|``): :func:`clik.solve` (compiled
+  and Python engines) against pink iterated to convergence (capped,
+  :mod:`clik.bench.solve_pink`) on the same targets.
 - **Case study** (:mod:`clik.bench.case_study`): the eight shipped runs
   (:data:`clik.scenarios.CASE_STUDY`), total wall time of ``execute()``, with and
   without building (robot loading).
@@ -30,9 +36,10 @@ What is measured (all through clik's public API, on the machine it runs on):
 
 Fairness: the compared step variants run interleaved, one whole run of each per
 round (the order rotates every round) after one warm-up run each, and the solve
-benchmark alternates clik and pink target by target. Figures are medians over
-rounds (or targets) with p10 and p90; ratios are pink's median over clik's median
-from the same rounds.
+benchmark rotates clik's two engines and pink target by target. Figures are
+medians over rounds (or targets) with p10 and p90; ratios (``ratios`` in
+``bench.json``) are pink's median, or the Python engine's, over the compiled
+engine's median from the same rounds.
 
 The targets each figure is compared with are data, ``targets.toml`` beside this
 file (:mod:`clik.bench.targets`). :func:`clik.bench.suite.run_bench` writes

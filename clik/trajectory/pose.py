@@ -45,13 +45,15 @@ class PoseTrajectory(Trajectory):
         times, _ = self._times(t)
         translation = self.position.sample(times)
         rotation = self.orientation.sample(times)
-        return Reference(
-            times,
-            position=translation.position,
-            linear_velocity=translation.linear_velocity,
-            rotation=rotation.rotation,
-            angular_velocity=rotation.angular_velocity,
-        )
+        if translation.position is None or rotation.rotation is None:  # a user's own parts
+            return Reference(
+                times,
+                position=translation.position,
+                linear_velocity=translation.linear_velocity,
+                rotation=rotation.rotation,
+                angular_velocity=rotation.angular_velocity,
+            )
+        return Reference.of_checked(times, translation, rotation)
 
     def __repr__(self) -> str:
         return f"PoseTrajectory({self.position!r}, {self.orientation!r})"

@@ -97,6 +97,29 @@ class Reference:
                     f"a non-rotation at sample {k}, t = {t[k]:.6g} s",
                 )
 
+    @classmethod
+    def of_checked(
+        cls,
+        t: np.ndarray,
+        position: Reference,
+        rotation: Reference,
+    ) -> Reference:
+        """The position part of one checked reference and the rotation part of another.
+
+        Both were checked when they were built, on the same times ``t``: nothing is
+        checked again (a pose trajectory's sample, every run).
+        """
+        out = object.__new__(cls)
+        for name, value in (
+            ("t", np.asarray(t, dtype=float)),
+            ("position", position.position),
+            ("linear_velocity", position.linear_velocity),
+            ("rotation", rotation.rotation),
+            ("angular_velocity", rotation.angular_velocity),
+        ):
+            object.__setattr__(out, name, value)
+        return out
+
     def __len__(self) -> int:
         """Number of samples N."""
         return int(self.t.shape[0])
