@@ -383,7 +383,8 @@ def _solve_compiled(
     solver, keep = _compiled_solver(task, key)
     robot = task.robot
     if type(target) is pin.SE3 and (q0 is None or _plain_configuration(q0, robot.nq)):
-        p_d, R_d = target.translation, target.rotation
+        se3: Any = target  # a pin.SE3 (pin has no type information)
+        p_d, R_d = se3.translation, se3.rotation
         q = robot.q_reference if q0 is None else q0
     else:
         p_d, R_d = _checked_target(task, target)
