@@ -305,104 +305,124 @@ def _compiled_engine() -> ModuleType:
     return load()
 
 
-_SOLVERS: weakref.WeakKeyDictionary[Task, dict[tuple[object, ...], Any]] = (
-    weakref.WeakKeyDictionary()
-)
-"""Compiled solvers kept per task (dropped with it), keyed by the settings as given
-(:func:`_settings_key`), least recently used first. A solver holds no result between
-solves: each :func:`solve` takes its solver out while it runs and puts it back after,
-so a solve running in another thread builds its own."""
+class _Compiled:
+    """A compiled solver of one task with one set of settings, and its last restarts.
+
+    The restart configurations are kept for the next solve with the same integer
+    seed (and the same joint limits): drawing them costs ~30-70 us.
+
+    Args:
+        solver: The engine's ``Solver``.
+        nq: The robot's ``nq``.
+    """
+
+    __slots__ = ("limits", "nq", "seed", "solver", "starts")
+
+    def __init__(self, solver: Any, nq: int) -> None:
+        self.solver, self.nq = solver, nq
+        self.seed: int | None = None
+        self.limits: tuple[bytes, bytes] | None = None
+        self.starts: np.ndarray | None = None
+
+    def restart_configurations(self, robot: Robot, seed: int | None, count: int) -> np.ndarray:
+        """:func:`_random_configurations` of ``default_rng(seed)``, kept for an integer seed."""
+        model = robot.model
+        limits = (model.lowerPositionLimit.tobytes(), model.upperPositionLimit.tobytes())
+        kept = type(seed) is int and (seed, limits) == (self.seed, self.limits)
+        if kept and self.starts is not None:
+            return self.starts
+        starts = _random_configurations(robot, np.random.default_rng(seed), count)
+        starts.flags.writeable = False
+        if type(seed) is int:  # other seeds (None: fresh entropy) draw anew each time
+            self.seed, self.limits, self.starts = seed, limits, starts
+        return starts
+
+
+_SOLVERS: dict[int, dict[tuple[Any, ...], _Compiled]] = {}
+"""Compiled solvers kept per task (by ``id``, dropped with the task), keyed by the
+settings as given (the key :func:`solve` builds), least recently used first. A solver
+holds no result between solves; each solve takes its solver out of here while it runs
+and puts it back after, so a solve running meanwhile in another thread builds its own."""
 
 _SOLVERS_PER_TASK = 8
 """Solvers kept per task (the least recently used goes first)."""
 
 
-def _settings_key(*settings: object) -> tuple[object, ...]:
-    """A cache key of :func:`solve`'s settings: the values, and the types of the integers.
+def _solvers_of(task: Task) -> dict[tuple[Any, ...], _Compiled]:
+    """The solvers kept for ``task``: an empty dict at its first compiled solve."""
+    solvers = _SOLVERS.get(id(task))
+    if solvers is None:
+        solvers = _SOLVERS[id(task)] = {}
+        weakref.finalize(task, _SOLVERS.pop, id(task), None)
+    return solvers
 
-    Equal keys mean settings that pass or fail the checks alike and give the same
-    solve (``1`` and ``1.0`` are the same step; ``100`` and ``100.0`` are not the same
-    ``max_iterations``: the second is refused).
-    """
-    return (*settings, type(settings[6]), type(settings[7]))
 
-
-def _compiled_solver(task: Task, key: tuple[object, ...]) -> tuple[Any, bool]:
-    """The compiled solver for ``task`` and these settings, taken out of the cache.
-
-    A new one is built, after the settings are checked, when none is kept.
-
-    Returns:
-        The solver and whether it may be put back (its key is hashable).
+def _new_compiled(task: Task, key: tuple[Any, ...]) -> _Compiled:
+    """A new compiled solver for ``task``, once the settings in ``key`` are checked.
 
     Raises:
         InputError: A bad setting, named.
     """
-    solvers = _SOLVERS.get(task)
-    try:
-        solver = None if solvers is None else solvers.pop(key, None)
-        hashable = True
-    except TypeError:  # e.g. a NumPy array as a setting
-        solver, hashable = None, False
-    if solver is not None:
-        return solver, True
-    s = _Settings(check_law(key[0]), *key[1:8])  # type: ignore[arg-type]
+    s = _Settings(check_law(key[0]), *key[1:8])
     _check_settings(s)
-    solver = _compiled_engine().Solver(
-        task.robot.model, task.frame_id, task.rows.tolist(), law=s.law, step=s.step,
-        damping=s.damping, mu=s.mu, tolerance=s.tolerance,
-        orientation_tolerance=s.orientation_tolerance, max_iterations=s.max_iterations,
+    robot = task.robot
+    return _Compiled(
+        _compiled_engine().Solver(
+            robot.model, task.frame_id, task.rows.tolist(), robot.q_reference, law=s.law,
+            step=s.step, damping=s.damping, mu=s.mu, tolerance=s.tolerance,
+            orientation_tolerance=s.orientation_tolerance, max_iterations=s.max_iterations,
+        ),
+        robot.nq,
     )  # fmt: skip
-    return solver, hashable
-
-
-def _keep_solver(task: Task, key: tuple[object, ...], solver: Any) -> None:
-    """Put a solver back into the cache, dropping the least recently used beyond the limit."""
-    solvers = _SOLVERS.get(task)
-    if solvers is None:
-        solvers = _SOLVERS[task] = {}
-    while len(solvers) >= _SOLVERS_PER_TASK:
-        del solvers[next(iter(solvers))]
-    solvers[key] = solver
 
 
 def _solve_compiled(
-    task: Task, target: object, q0: object, key: tuple[object, ...], seed: int | None
+    task: Task, target: object, q0: object, key: tuple[Any, ...], seed: int | None
 ) -> SolveResult:
     """:func:`solve` in the compiled engine: the same checks, iteration, attempts and restarts.
 
     The solver comes from the cache (:data:`_SOLVERS`), so a repeated solve costs
-    the target's check and the C++ run. A ``pin.SE3`` target and a ``q0`` that is
-    None or a float array of ``nq`` entries are checked for finite values in C++;
-    anything else, or a value that is not finite, goes through :func:`_checked_target`
-    and ``check_configuration`` (which name the bad input). The engine runs the
-    first attempt from ``q0``; only when it fails are the restart configurations
-    drawn (all ``restarts`` of them at once, vectorised: creating the generator
-    costs ~20 us) and handed over to continue the solve.
+    little more than the C++ run. A ``pin.SE3`` target and a ``q0`` that is None or
+    a float array of ``nq`` entries go to C++ as they are, and C++ checks that their
+    values are finite; anything else, or a value that is not finite, goes through
+    :func:`_checked_target` and ``check_configuration`` (which name the bad input).
+    The engine runs the first attempt from ``q0``; only when it fails are the
+    restart configurations drawn (all ``restarts`` of them at once, vectorised:
+    creating the generator costs ~10-20 us; kept for the next solve with the same
+    seed) and handed over to continue the solve.
     """
-    solver, keep = _compiled_solver(task, key)
-    robot = task.robot
-    if type(target) is pin.SE3 and (q0 is None or _plain_configuration(q0, robot.nq)):
-        se3: Any = target  # a pin.SE3 (pin has no type information)
-        p_d, R_d = se3.translation, se3.rotation
-        q = robot.q_reference if q0 is None else q0
+    solvers = _SOLVERS.get(id(task)) or _solvers_of(task)
+    try:
+        compiled = solvers.pop(key, None)  # out of the cache while it runs
+    except TypeError:  # an unhashable setting (e.g. a 0-d NumPy array): never kept
+        compiled = None
+    if compiled is None:
+        compiled = _new_compiled(task, key)
+    solver, robot = compiled.solver, task.robot
+    q = np.empty(compiled.nq)  # where the engine writes the solve's configuration
+    if type(target) is pin.SE3 and (q0 is None or _plain_configuration(q0, compiled.nq)):
+        start = time.perf_counter()
+        out = solver.start_se3(target, q0, q)
     else:
         p_d, R_d = _checked_target(task, target)
-        q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
-    start = time.perf_counter()
-    out = solver.start(p_d, R_d, q)
+        q_start = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
+        start = time.perf_counter()
+        out = solver.start(p_d, R_d, q_start, q)
     if out is None:  # a value that is not finite: the checks in Python name it
         _checked_target(task, target)
         robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
         raise AssertionError("the engine refused a finite target and q0")  # pragma: no cover
     restarts = key[7]
     if not out[0] and restarts:
-        rng = np.random.default_rng(seed)
-        out = solver.run(_random_configurations(robot, rng, restarts))  # type: ignore[arg-type]
+        out = solver.run(compiled.restart_configurations(robot, seed, restarts), q)
     elapsed = time.perf_counter() - start
-    if keep:
-        _keep_solver(task, key, solver)
-    success, q, iterations, attempts, pos, rot = out
+    while len(solvers) >= _SOLVERS_PER_TASK:  # the least recently used goes
+        solvers.pop(next(iter(solvers)), None)
+    try:
+        solvers[key] = compiled  # back into the cache, most recently used
+    except TypeError:
+        pass
+    success, iterations, attempts, pos, rot = out
     if success:
         reason = _converged_reason(iterations)
     else:
@@ -454,9 +474,12 @@ def solve(
         InputError: A bad argument, named.
     """
     if engine == "compiled":
-        key = _settings_key(
-            law, step, damping, mu, tolerance, orientation_tolerance, max_iterations, restarts
-        )
+        # The cache key of the settings: their values, and the integers' types (equal
+        # keys pass or fail the checks alike: 100.0 iterations are refused, 100 not).
+        key = (
+            law, step, damping, mu, tolerance, orientation_tolerance, max_iterations, restarts,
+            type(max_iterations), type(restarts),
+        )  # fmt: skip
         return _solve_compiled(task, target, q0, key, seed)
     if engine != "python":
         raise InputError("engine", "'compiled' or 'python'", engine)

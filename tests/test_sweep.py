@@ -33,7 +33,7 @@ from clik.sweep import keypath, load_sweep, read_results, run_id, run_sweep
 from clik.sweep.progress import RunProgress
 from clik.sweep.spec import tomllib
 from clik.sweep.store import ResultStore, SweepOutputExistsError, read_manifest
-from clik.sweep.worker import TRACE_ENV, robot_loads, run_one
+from clik.sweep.worker import TRACE_ENV, robot_loads, run_batch, run_one
 
 distributed = pytest.importorskip("distributed", reason="pip install 'dask[distributed]'")
 
@@ -396,6 +396,19 @@ def test_run_one_matches_the_api_and_loads_the_robot_once(tmp_path):
     assert rows[0]["run_id"] == sweep.runs[0].run_id and rows[0]["error"] is None
 
 
+def test_run_batch_starts_no_run_once_its_time_is_spent(tmp_path):
+    path = write(tmp_path, "short.toml", SHORT_CASE)
+    sweep = load_sweep(
+        write(tmp_path, "s.toml", obstacle_grid(3, 1).replace("short.toml", str(path)))
+    )
+    runs = [(r.run_id, r.params) for r in sweep.runs]
+    first = run_batch(sweep.base_data, str(sweep.base_file), runs, budget_s=0.0)
+    assert [row["run_id"] for row in first] == [runs[0][0]]  # at least one run
+    rows = run_batch(sweep.base_data, str(sweep.base_file), runs[1:])
+    assert [row["run_id"] for row in rows] == [rid for rid, _ in runs[1:]]  # all, in order
+    assert {row["status"] for row in [*first, *rows]} == {"completed"}
+
+
 def test_a_run_that_raises_is_a_row(tmp_path):
     data = tomllib.loads(SHORT_CASE)
     row = run_one(data, str(tmp_path / "short.toml"), "x", {"task.frame": "nope"})
@@ -627,6 +640,108 @@ def test_workers_load_the_robot_once(tmp_path, short_sweep, local_client):
     assert report.computed == 12
     loads = local_client.run(robot_loads)
     assert set(loads.values()) <= {0, 1}, loads  # one robot per worker, whatever the runs
+
+
+def test_batch_size_follows_the_runs_left_and_is_bounded_in_time():
+    from clik.sweep.execute import MAX_BATCH, batch_size
+
+    assert batch_size(120, 2, None) == 30  # a quarter of what is left, on 2 threads
+    assert batch_size(10_000, 2, None) == MAX_BATCH  # no run timed yet: the worker's budget
+    assert batch_size(116, 2, 0.006) == 29
+    assert batch_size(20, 2, 0.006) == 9  # at least 0.05 s of work: worth a task
+    assert batch_size(5, 2, 0.006) == 5  # never more than is left
+    assert batch_size(10_000, 2, 0.001) == MAX_BATCH
+    assert batch_size(10_000, 2, 0.1) == 5  # at most 0.5 s of work: Ctrl-C and progress
+    assert batch_size(10_000, 2, 3.0) == 1  # long runs: one per task
+    # A whole sweep: batches shrink to the end, and every thread gets several.
+    sizes, left = [], 120
+    while left:
+        sizes.append(batch_size(left, 2, 0.006))
+        left -= sizes[-1]
+    assert sizes == sorted(sizes, reverse=True) and len(sizes) >= 4 * 2
+    assert sizes[0] == 120 // 4 and max(sizes[-3:]) <= 9
+
+
+def test_short_runs_go_in_batches_with_the_rows_of_single_runs(tmp_path, local_client, monkeypatch):
+    """The compiled engine runs the case study in milliseconds: a task computes several."""
+    from clik.sweep import execute
+
+    path = write(
+        tmp_path,
+        "s.toml",
+        'base = "case_study_both"\n[vary."obstacles.pin.position"]\n'
+        "uniform = { low = [0.66, -0.32, 0.0], high = [0.74, -0.24, 0.0], samples = 24 }\n",
+    )
+    sweep = load_sweep(path)
+    batches: list[int] = []
+
+    class Counting(execute._Session):
+        def next_batch(self):
+            batch = super().next_batch()
+            if batch:
+                batches.append(len(batch))
+            return batch
+
+    monkeypatch.setattr(execute, "_Session", Counting)
+    report = run_sweep(sweep, tmp_path / "out", client=local_client, progress=False)
+    assert report.complete and report.computed == 24 and sum(batches) >= 24
+    assert len(batches) < 24 and max(batches) > 1, batches
+    rows = {r["run_id"]: r for r in read_results(tmp_path / "out")}
+    for run in sweep.runs[::7]:  # the same row as the run alone, in this process
+        alone = run_one(sweep.base_data, str(sweep.base_file), run.run_id, run.params)
+        row = rows[run.run_id]
+        assert row["obstacles.pin.position"] == run.params["obstacles.pin.position"]
+        assert (row["status"], row["steps"]) == (alone["status"], alone["steps"])
+        assert row["max_task_error"] == pytest.approx(alone["max_task_error"], rel=1e-12)
+
+
+def test_a_failed_batch_is_retried_run_by_run(tmp_path, short_sweep, local_client, monkeypatch):
+    """A task that fails (unlike a run that raises, which is a row) fails its whole batch:
+    its runs go again one per task, and only the one that fails its task is an error."""
+    from clik.sweep import execute
+
+    sweep = load_sweep(short_sweep(4, 2))
+    culprit = sweep.runs[5].run_id
+    monkeypatch.setattr(execute, "batch_size", lambda remaining, threads, seconds: 4)
+
+    def poison(run_id: str) -> None:
+        from clik.sweep import worker
+
+        real = worker.run_one
+
+        def run_one(base_data, base_file, rid, params, keep=False):
+            if rid == run_id:
+                raise RuntimeError(f"poisoned {rid}")  # escapes run_batch: the task fails
+            return real(base_data, base_file, rid, params, keep)
+
+        worker._real_run_one = real
+        worker.run_one = run_one
+
+    def cure() -> None:
+        from clik.sweep import worker
+
+        worker.run_one = worker.__dict__.pop("_real_run_one", worker.run_one)
+
+    local_client.run(poison, culprit)
+    try:
+        report = run_sweep(sweep, tmp_path / "out", client=local_client)
+    finally:
+        local_client.run(cure)
+    rows = {r["run_id"]: r for r in read_results(tmp_path / "out")}
+    assert report.complete and set(rows) == {r.run_id for r in sweep.runs}
+    assert rows[culprit]["status"] == "error"
+    assert rows[culprit]["error"] == f"RuntimeError: poisoned {culprit}"
+    assert Counter(r["status"] for r in rows.values()) == {"completed": 7, "error": 1}
+    assert report.statuses == {"completed": 7, "error": 1} and report.failed == 1
+
+
+def test_local_workers_do_not_profile(local_client):
+    import dask.config
+
+    flags = local_client.run(lambda: dask.config.get("distributed.worker.profile.enabled"))
+    assert set(flags.values()) == {False}
+    sizes = local_client.run(lambda: dask.config.get("distributed.worker.memory.target"))
+    assert set(sizes.values()) == {dask.config.get("distributed.worker.memory.target")}
 
 
 def test_status_line_and_what_fails_a_sweep(tmp_path):

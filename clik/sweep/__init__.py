@@ -1,8 +1,8 @@
 """Parameter sweeps and reachability maps on Dask, from a laptop to a cluster.
 
 A *sweep* is a base scenario plus the keys to vary (:mod:`clik.sweep.spec`);
-it expands into runs with stable ids, which run as Dask tasks
-(:mod:`clik.sweep.execute`) on a local cluster or an existing one, each worker
+it expands into runs with stable ids, which run in batches, a Dask task each
+(:mod:`clik.sweep.execute`), on a local cluster or an existing one, each worker
 loading its robots once (:mod:`clik.sweep.worker`). One row per run is
 written as runs finish (:mod:`clik.sweep.store`); rerunning a sweep into the
 same folder computes only the runs missing there.

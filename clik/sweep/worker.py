@@ -1,4 +1,4 @@
-"""What runs on a Dask worker: one sweep run in, one result row out.
+"""What runs on a Dask worker: a batch of sweep runs in, one result row per run out.
 
 Robots are loaded once per worker process (and thread), not once per run:
 :func:`cached_robot` keeps the last few robots, keyed by what
@@ -8,6 +8,9 @@ builds its task, trajectory and constraints on the cached robot.
 
 A run that raises becomes a row with ``status = "error"`` and the error
 message; it never fails the Dask task, so one bad run does not stop a sweep.
+A Dask task computes a batch of runs (:func:`run_batch`, one :func:`run_one`
+each, in order, until a time budget is spent): a run takes milliseconds, and a
+task per run would cost more in Dask's overhead than the run itself.
 
 For tests and debugging, when the environment variable ``CLIK_SWEEP_TRACE``
 names a folder, every run computed appends its id to
@@ -188,6 +191,33 @@ def run_one(
     row.update(extra)
     _trace(run_id)
     return row
+
+
+def run_batch(
+    base_data: dict[str, Any],
+    base_file: str,
+    runs: list[tuple[str, dict[str, Any]]],
+    keep_trajectory: bool = False,
+    budget_s: float | None = None,
+) -> list[dict[str, Any]]:
+    """Compute runs one after the other (:func:`run_one`); their rows, in the same order.
+
+    Args:
+        base_data: The base scenario as read from TOML.
+        base_file: Its path (relative paths resolve against its folder).
+        runs: ``(run_id, params)`` of each run.
+        keep_trajectory: See :func:`run_one`.
+        budget_s: Start no run once this long has passed [s] (None: no limit): the
+            rows are then those of the first runs only (at least one), and the
+            caller submits the others again.
+    """
+    start = time.perf_counter()
+    rows: list[dict[str, Any]] = []
+    for rid, params in runs:
+        if rows and budget_s is not None and time.perf_counter() - start >= budget_s:
+            break
+        rows.append(run_one(base_data, base_file, rid, params, keep_trajectory))
+    return rows
 
 
 def _npz_bytes(result: Any) -> bytes:

@@ -53,10 +53,40 @@ struct SolveTask {
   std::vector<int> rows;  // kept components of (x, y, z, rx, ry, rz), ascending
 };
 
+// The law's small linear algebra on the task rows: Rows = 6 for a full pose
+// (fixed size: no loops over run-time sizes, no heap), Eigen::Dynamic for a
+// masked task (1 to 6 rows).
+template <int Rows>
+class LawSystem {
+ public:
+  using RowVec = Eigen::Matrix<double, Rows, 1>;
+  using Square = Eigen::Matrix<double, Rows, Rows>;
+
+  LawSystem(int m, int nv);
+
+  // The law's velocity from J and e: (10) qdot = J^T (J J^T + lambda2 I)^-1 e,
+  // (9) qdot = J^T e.
+  void qdot(LawKind law, double lambda2, Vec& dq);
+
+  Eigen::Matrix<double, Rows, Eigen::Dynamic> J;  // task Jacobian (m, nv)
+  RowVec e;                                       // task error (m)
+
+ private:
+  void solve_small();  // y = A^-1 e
+
+  RowVec y_, tmp_;
+  Square A_;
+  Eigen::LLT<Square> llt_;
+  Eigen::JacobiSVD<Square> svd_;
+};
+
 class Solver {
  public:
   // `model` must outlive the solver; the solver owns its own pinocchio::Data.
-  Solver(const pinocchio::Model& model, const SolveTask& task, const SolveSettings& settings);
+  // `reference` (nq): the robot's reference configuration, where a solve
+  // given no q0 starts (the caller's business: see reference()).
+  Solver(const pinocchio::Model& model, const SolveTask& task, const SolveSettings& settings,
+         const Vec& reference);
 
   // Begin a new solve (forgetting the last one): target p_d, R_d (each unused
   // where the task has no such rows), clipping bounds from the model's limits
@@ -68,6 +98,8 @@ class Solver {
   // Continue the solve: one attempt from each row of `starts` (nq columns) in
   // turn, until one converges. Returns success().
   bool run(const Mat& starts);
+
+  const Vec& reference() const { return reference_; }
 
   // The converged configuration, else the best attempt's (least pos + rot).
   const Vec& q() const { return success_ ? q_ : best_q_; }
@@ -89,7 +121,6 @@ class Solver {
   void error(const Vec& q);
   void world_errors(double& pos, double& rot) const;
   void step(double err2);
-  void solve_small();
 
   const pinocchio::Model& model_;
   pinocchio::Data data_;
@@ -97,6 +128,7 @@ class Solver {
   SolveSettings s_;
   bool full_pose_, has_position_, has_orientation_;
   int m_;
+  Vec reference_;
 
   // The target and bounds of the solve (start()).
   Vec3 position_ = Vec3::Zero();      // p_d
@@ -106,13 +138,13 @@ class Solver {
   bool clip_ = false;
 
   // Workspaces.
-  Vec q_, q_next_, dq_, e_, y_, e6_, tmp_;
-  Eigen::MatrixXd J_, A_;
+  Vec q_, q_next_, dq_;
+  Eigen::Matrix<double, 6, 1> e6_;
+  LawSystem<6> pose_;                  // e and J of a full pose
+  LawSystem<Eigen::Dynamic> masked_;   // e and J of a masked task (empty for a full pose)
   pinocchio::Data::Matrix6x J6_;  // the frame Jacobian (LOCAL or LOCAL_WORLD_ALIGNED)
   Eigen::Matrix<double, 6, 6> Jlog_;
   Mat3 R_err_;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt_;
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd_;
   double pos_ = 0.0, rot_ = 0.0;  // error norms at the last error() [m], [rad]
 
   // The solve so far.
