@@ -18,9 +18,7 @@ void bind_laws(nb::module_& m) {
         const int rows = static_cast<int>(J.rows());
         const int nv = static_cast<int>(J.cols());
         LawSettings s;
-        s.kind = law == "pseudoinverse" ? LawKind::pseudoinverse
-                 : law == "nonlinear"   ? LawKind::nonlinear
-                                        : LawKind::transpose;
+        s.kind = law_kind(law);
         s.damping = damping;
         s.dt = dt;
         s.beta_max = beta_max;

@@ -27,8 +27,7 @@ namespace clik {
 namespace {
 
 LawKind solve_law(const std::string& law) {
-  if (law == "pseudoinverse") return LawKind::pseudoinverse;
-  if (law == "transpose") return LawKind::transpose;
+  if (law == "pseudoinverse" || law == "transpose") return law_kind(law);
   throw std::invalid_argument("law: expected 'pseudoinverse' or 'transpose' in solve mode, got '" +
                               law + "'");
 }

@@ -26,13 +26,6 @@ namespace {
 
 using F64 = nb::ndarray<double, nb::c_contig, nb::device::cpu>;
 
-LawKind law_kind(const std::string& law) {
-  if (law == "pseudoinverse") return LawKind::pseudoinverse;
-  if (law == "nonlinear") return LawKind::nonlinear;
-  if (law == "transpose") return LawKind::transpose;
-  throw std::invalid_argument("law: 'transpose', 'nonlinear' or 'pseudoinverse', got " + law);
-}
-
 const char* stop_name(Stop s) {
   switch (s) {
     case Stop::none: return "";

@@ -7,10 +7,17 @@
 
 namespace clik {
 
+Law::ConstraintBlock::ConstraintBlock(int v, int nv)
+    : C(v, nv), svd(v, nv, Eigen::ComputeThinU | Eigen::ComputeThinV) {}
+
 Law::Law(const LawSettings& settings, int rows, int nv)
     : s_(settings), b_(rows), work_(rows), jte_(nv), qdot_c_(nv), qdot_t_(nv), rest_(rows),
-      y_(rows), w_(rows), gain_(rows), tmp_(rows), C_(rows, nv), JN_(rows, nv), A_(rows, rows),
-      P_(nv, nv), M_(rows, rows), eig_(rows), llt_(rows), svd_(rows, nv, Eigen::ComputeThinU | Eigen::ComputeThinV) {}
+      y_(rows), w_(rows), gain_(rows), tmp_(rows), JN_(rows, nv), A_(rows, rows),
+      M_(rows, rows), eig_(rows), llt_(rows) {
+  if (s_.kind != LawKind::pseudoinverse) return;
+  constraint_.reserve(static_cast<size_t>(rows));
+  for (int v = 1; v <= rows; ++v) constraint_.emplace_back(v, nv);
+}
 
 double Law::velocity(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot) {
   const auto J = ext.J.topRows(r);
@@ -89,12 +96,12 @@ double Law::prioritized(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot) {
   if (v > 0) {
     // One SVD, C = U diag(s) V^T, for both levels: C's filtered inverse, and the
     // null-space projection J N = J - (J V_r) V_r^T on its row space V_r.
-    C_.resize(v, ext.nv);
-    C_ = ext.J.middleRows(m, v);
-    svd_.compute(C_, Eigen::ComputeThinU | Eigen::ComputeThinV);
-    const auto& sv = svd_.singularValues();
-    const auto& U = svd_.matrixU();
-    const auto& Vm = svd_.matrixV();
+    ConstraintBlock& block = constraint_[static_cast<size_t>(v - 1)];
+    block.C = ext.J.middleRows(m, v);
+    block.svd.compute(block.C, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const auto& sv = block.svd.singularValues();
+    const auto& U = block.svd.matrixU();
+    const auto& Vm = block.svd.matrixV();
     const Eigen::Index k = sv.size();
     for (Eigen::Index i = 0; i < k; ++i) {
       gain_[i] = sv[i] / (std::max(sv[i] * sv[i], epsilon * epsilon) + d2);

@@ -6,6 +6,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
+#include <vector>
 
 #include "extended_task.hpp"
 #include "types.hpp"
@@ -26,7 +27,10 @@ struct LawSettings {
 
 class Law {
  public:
-  // rows: the most rows an extended task will hold; nv: joint velocity size.
+  // rows: the most rows an extended task will hold; nv: joint velocity size. Law (10)
+  // gets one constraint block and SVD workspace per possible count of active
+  // constraint rows (1..rows, and rows <= m + nv): the count changes from sample to
+  // sample, and an SVD resized to it would reallocate.
   Law(const LawSettings& settings, int rows, int nv);
 
   // Joint velocity [rad/s] of the law on the first r rows of ext into qdot.
@@ -43,10 +47,16 @@ class Law {
 
   LawSettings s_;
   Vec b_, work_, jte_, qdot_c_, qdot_t_, rest_, y_, w_, gain_, tmp_;
-  Eigen::MatrixXd C_, JN_, A_, P_, M_;
+  Eigen::MatrixXd JN_, A_, M_;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig_;
   Eigen::LLT<Eigen::MatrixXd> llt_;
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd_;
+  // constraint_[v - 1]: the v active constraint rows C and their SVD.
+  struct ConstraintBlock {
+    ConstraintBlock(int v, int nv);
+    Eigen::MatrixXd C;
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd;
+  };
+  std::vector<ConstraintBlock> constraint_;
 };
 
 }  // namespace clik

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <stdexcept>
+#include <string>
 
 namespace clik {
 
@@ -12,5 +14,14 @@ using Mat3 = Eigen::Matrix3d;
 
 // The law, as clik/laws.py names it.
 enum class LawKind { transpose, nonlinear, pseudoinverse };
+
+// The law named as in clik/laws.py; std::invalid_argument for any other name.
+inline LawKind law_kind(const std::string& law) {
+  if (law == "pseudoinverse") return LawKind::pseudoinverse;
+  if (law == "nonlinear") return LawKind::nonlinear;
+  if (law == "transpose") return LawKind::transpose;
+  throw std::invalid_argument("law: expected 'transpose', 'nonlinear' or 'pseudoinverse', got '" +
+                              law + "'");
+}
 
 }  // namespace clik

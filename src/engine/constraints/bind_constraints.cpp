@@ -29,22 +29,18 @@ namespace clik {
 
 namespace {
 
-// Python values through numpy, as flat lists (set-up only).
-std::vector<double> floats(nb::handle h) {
+// Python values through numpy as a flat list of T, numpy dtype `dtype` (set-up only).
+template <typename T>
+std::vector<T> numbers(nb::handle h, const char* dtype) {
   nb::module_ np = nb::module_::import_("numpy");
-  nb::object flat = np.attr("asarray")(h, "dtype"_a = "float64").attr("ravel")().attr("tolist")();
-  std::vector<double> out;
-  for (nb::handle x : flat) out.push_back(nb::cast<double>(x));
+  nb::object flat = np.attr("asarray")(h, "dtype"_a = dtype).attr("ravel")().attr("tolist")();
+  std::vector<T> out;
+  for (nb::handle x : flat) out.push_back(nb::cast<T>(x));
   return out;
 }
 
-std::vector<int> ints(nb::handle h) {
-  nb::module_ np = nb::module_::import_("numpy");
-  nb::object flat = np.attr("asarray")(h, "dtype"_a = "int64").attr("ravel")().attr("tolist")();
-  std::vector<int> out;
-  for (nb::handle x : flat) out.push_back(nb::cast<int>(x));
-  return out;
-}
+std::vector<double> floats(nb::handle h) { return numbers<double>(h, "float64"); }
+std::vector<int> ints(nb::handle h) { return numbers<int>(h, "int64"); }
 
 std::vector<std::string> strings(nb::handle h) {
   std::vector<std::string> out;
@@ -65,14 +61,6 @@ Vec3 vec3(nb::handle h) {
 std::optional<double> optional_float(nb::handle h) {
   if (h.is_none()) return std::nullopt;
   return nb::cast<double>(h);
-}
-
-LawKind law_kind(const std::string& law) {
-  if (law == "pseudoinverse") return LawKind::pseudoinverse;
-  if (law == "nonlinear") return LawKind::nonlinear;
-  if (law == "transpose") return LawKind::transpose;
-  throw std::invalid_argument("law: expected 'transpose', 'nonlinear' or 'pseudoinverse', got '" +
-                              law + "'");
 }
 
 // A new numpy array holding a copy of n = prod(shape) values from src.
