@@ -22,6 +22,7 @@ from clik.engine import check_installed
 from clik.errors import (
     ClikError,
     EngineError,
+    ExportError,
     FrameNotFound,
     GeometryError,
     InfeasibleError,
@@ -35,12 +36,15 @@ from clik.errors import (
 from clik.result import TrackingResult
 from clik.robot import MimicJointWarning, Robot
 from clik.solve_mode import SolveResult, solve
+from clik.speed_limits import SpeedLimits
 from clik.task import Task
 from clik.tracking import ReachWarning, StabilityWarning, Tracker, track
+from clik.velocity_limits import track_within_limits
 
 __all__ = [
     "ClikError",
     "EngineError",
+    "ExportError",
     "FrameNotFound",
     "GeometryError",
     "InfeasibleError",
@@ -53,6 +57,7 @@ __all__ = [
     "RobotLoadError",
     "ScenarioError",
     "SolveResult",
+    "SpeedLimits",
     "StabilityWarning",
     "Task",
     "Tracker",
@@ -61,6 +66,7 @@ __all__ = [
     "plot",
     "solve",
     "track",
+    "track_within_limits",
     "trajectory",
     "viz",
 ]

@@ -2,9 +2,10 @@
 
 Errors are printed without a traceback (``--debug`` shows it) and the exit
 code tells the kind: 0 success, 1 a sweep with failed runs (``clik sweep``:
-a run raised, or ended ``violated`` or ``diverged``; every row is still
-written), 2 bad input, 3 infeasible (the run stopped with ``deadlock`` or
-``diverged``; its outputs are still written), 4 internal.
+a run raised, or ended ``violated``, ``velocity_limit`` or ``diverged``; every
+row is still written), 2 bad input, 3 infeasible (the run ended ``violated``,
+``velocity_limit``, ``deadlock`` or ``diverged``; its outputs are still
+written), 4 internal.
 """
 
 from __future__ import annotations
@@ -14,13 +15,18 @@ import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tqdm import tqdm
 
-from clik.errors import EXIT_CODES, ClikError
+from clik.errors import EXIT_CODES, ClikError, InputError
+from clik.export import FORMATS, check_exportable
 from clik.io import prepare_out
 from clik.result import FAILED_STATUSES, TrackingResult, write_outputs
+
+if TYPE_CHECKING:
+    from clik.scenario import Scenario
+    from clik.sweep.reach_data import ReachSpec
 
 SWEEP_FAILED = 1
 """Exit code of ``clik sweep`` when a run in its folder raised or ended violated or diverged."""
@@ -71,24 +77,39 @@ def print_summary(name: str, summary: dict) -> None:
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    """``clik solve``: run a scenario file, write its outputs; 3 when the run failed."""
+    """``clik solve``: run a scenario file, write its outputs; 3 when the run failed.
+
+    Export options are checked before the run and before the output folder is touched.
+    """
     from clik.runner import build
 
+    if args.export_every is not None and not args.export:
+        raise InputError("--export-every", "to be given with --export", args.export_every)
     run = build(args.scenario)
     if args.engine is not None:
         run.tracker.engine = args.engine
+    if args.export:
+        check_exportable(run.robot.model)
     out = prepare_out(Path(args.out), args.force)
     result = run.execute(ProgressBar(run.scenario.name, None if not args.quiet else False))
     summary = write_outputs(result, out)
-    write_extras(args, result, out, run.scenario.name)
+    extras = write_extras(args, result, out, run.scenario.name)
     if not args.quiet:
         print_summary(run.scenario.name, summary)
         print(f"  wrote {out / 'summary.json'} and {out / 'trajectory.npz'}")
+        if extras:
+            print("  and " + ", ".join(str(p) for p in extras))
     return EXIT_CODES["infeasible"] if result.status in FAILED_STATUSES else 0
 
 
-def write_extras(args: argparse.Namespace, result: TrackingResult, out: Path, name: str) -> None:
-    """``--html`` and ``--plots`` of ``clik solve``."""
+def write_extras(
+    args: argparse.Namespace, result: TrackingResult, out: Path, name: str
+) -> list[Path]:
+    """``--export``, ``--html`` and ``--plots`` of ``clik solve``; the exported files."""
+    written: list[Path] = []
+    if args.export:
+        every = 1 if args.export_every is None else args.export_every
+        written += result.export(out, args.export, every).values()
     if args.html:
         from clik.viz import export_html
 
@@ -97,6 +118,18 @@ def write_extras(args: argparse.Namespace, result: TrackingResult, out: Path, na
         from clik.plot import save_result_plots
 
         save_result_plots([result], out, [name])
+    return written
+
+
+def _export_every(text: str) -> int:
+    """The ``K`` of ``clik solve --export-every K``: an integer >= 1."""
+    try:
+        every = int(text)
+    except ValueError:
+        every = 0
+    if every < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return every
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -206,21 +239,17 @@ def _radians3(degrees: Sequence[float]) -> tuple[float, float, float]:
 
 
 def cmd_reach(args: argparse.Namespace) -> int:
-    """``clik reach``: a reachability map over a grid of target points."""
+    """``clik reach``: a reachability map over a grid of target points.
+
+    With ``--scenario``, the robot, its obstacles and its constraints come from the
+    scenario file, and the frame too unless ``--frame`` is given; the grid, the task
+    kind (``--orientation``) and its axes still come from the flags. Points solved
+    without the constraints but not with them are counted as blocked.
+    """
     from clik.sweep.reach import check_spec, reach_map
-    from clik.sweep.reach_data import ReachSpec
     from clik.sweep.reach_output import write_reach
 
-    spec = ReachSpec(
-        robot=args.robot,
-        frame=args.frame,
-        box=tuple(args.box),
-        step=args.step,
-        orientation_rpy=None if args.orientation is None else _radians3(args.orientation),
-        lock=dict(args.lock or []),
-        axes=tuple(args.axes) if args.axes else None,
-        restarts=args.restarts,
-    )
+    spec = _reach_spec(args)
     check_spec(spec)
     out = prepare_out(Path(args.out), args.force)
     reach = reach_map(
@@ -231,13 +260,62 @@ def cmd_reach(args: argparse.Namespace) -> int:
     )
     written = write_reach(reach, out, html=not args.no_html)
     if not args.quiet:
-        print(
-            f"reach {args.robot} {args.frame}: {int(reach.success.sum())}/{len(reach.points)} "
-            f"points reachable ({100 * reach.reachable_fraction:.1f} %) "
-            f"in {reach.wall_time_s:.1f} s"
+        counts = reach.counts()
+        line = (
+            f"reach {spec.robot} {spec.frame}: {counts['reachable']}/{len(reach.points)} "
+            f"points reachable ({100 * reach.reachable_fraction:.1f} %)"
         )
+        if spec.scenario is not None:
+            line += f", {counts['blocked']} blocked by the constraints"
+        print(f"{line}, {counts['unreachable']} unreachable in {reach.wall_time_s:.1f} s")
         print("  wrote " + ", ".join(str(p) for p in written.values()))
     return 0
+
+
+def _reach_spec(args: argparse.Namespace) -> ReachSpec:
+    """The :class:`~clik.sweep.reach_data.ReachSpec` of ``clik reach``'s arguments.
+
+    Raises:
+        InputError: Neither or both of ROBOT and ``--scenario``, no frame, or a
+            ``--scenario`` that is not a readable scenario file.
+    """
+    from clik.sweep.reach_data import ReachSpec
+
+    robot, frame = args.robot, args.frame
+    scenario_file, scenario_data = None, None
+    if args.scenario is not None:
+        if robot is not None:
+            raise InputError("--scenario", "no ROBOT argument with it (its [robot] is used)", robot)
+        scenario = _reach_scenario(args.scenario)
+        robot, frame = scenario.robot["source"], frame or scenario.task["frame"]
+        scenario_file, scenario_data = str(scenario.file.resolve()), scenario.raw
+    elif robot is None:
+        raise InputError("ROBOT", "a robot name or URDF path (or --scenario SCENARIO.toml)")
+    if frame is None:
+        raise InputError("--frame", "the frame to place (taken from --scenario's task if given)")
+    return ReachSpec(
+        robot=robot,
+        frame=frame,
+        box=tuple(args.box),
+        step=args.step,
+        orientation_rpy=None if args.orientation is None else _radians3(args.orientation),
+        lock=dict(args.lock or []),
+        axes=tuple(args.axes) if args.axes else None,
+        restarts=args.restarts,
+        scenario=scenario_file,
+        scenario_data=scenario_data,
+        tracking_attempts=args.tracking_attempts,
+    )
+
+
+def _reach_scenario(path: Path) -> Scenario:
+    """The scenario of ``clik reach --scenario``; any problem with it names the flag."""
+    from clik.scenario import load_scenario
+
+    try:
+        return load_scenario(path)
+    except ClikError as exc:
+        raise InputError("--scenario", f"a scenario file ({exc})") from None
 
 
 def _add_solve(sub: Any) -> None:
@@ -252,6 +330,20 @@ def _add_solve(sub: Any) -> None:
         "--engine",
         choices=("compiled", "python"),
         help="compiled (default: the scenario's [solver] engine) or python (the reference loop)",
+    )
+    s.add_argument(
+        "--export",
+        nargs="+",
+        choices=FORMATS,
+        metavar="FORMAT",
+        help="also write the joint trajectory for a controller: csv (DIR/trajectory.csv), "
+        "json (DIR/trajectory.json, a ROS JointTrajectory), or both",
+    )
+    s.add_argument(
+        "--export-every",
+        type=_export_every,
+        metavar="K",
+        help="export every K-th recorded sample and the last (default 1: all)",
     )
     s.add_argument("--quiet", action="store_true")
     s.set_defaults(func=cmd_solve)
@@ -323,8 +415,15 @@ def _add_sweep(sub: Any) -> None:
 def _add_reach(sub: Any) -> None:
     """The ``clik reach`` subcommand."""
     a = sub.add_parser("reach", help="reachability map: single-pose IK over a grid of points")
-    a.add_argument("robot", help="robot name or URDF path")
-    a.add_argument("--frame", required=True, help="the frame to place")
+    a.add_argument("robot", nargs="?", help="robot name or URDF path (or give --scenario)")
+    a.add_argument(
+        "--scenario",
+        type=Path,
+        metavar="SCENARIO.toml",
+        help="take the robot, its obstacles and constraints (and the frame, without "
+        "--frame) from a scenario file; points they block are counted apart",
+    )
+    a.add_argument("--frame", help="the frame to place (default: the scenario's task frame)")
     a.add_argument(
         "--box",
         nargs=6,
@@ -351,6 +450,12 @@ def _add_reach(sub: Any) -> None:
     )
     a.add_argument("--axes", nargs="+", help="task components kept, e.g. x y (planar arm)")
     a.add_argument("--restarts", type=int, default=20, help="random restarts per point")
+    a.add_argument(
+        "--tracking-attempts",
+        type=int,
+        default=4,
+        help="with --scenario: starts of the constrained law per blocked point",
+    )
     a.add_argument("--out", required=True, help="output folder")
     where = a.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, help="local worker processes (default: one per CPU)")

@@ -181,5 +181,17 @@ class EngineError(ClikError):
         super().__init__(f"compiled engine: {problem}")
 
 
+class ExportError(ClikError):
+    """A trajectory that cannot be exported (a joint of a kind with no single angle, ...).
+
+    Attributes:
+        problem: What is wrong, in words.
+    """
+
+    def __init__(self, problem: str) -> None:
+        self.problem = problem
+        super().__init__(f"cannot export the trajectory: {problem}")
+
+
 EXIT_CODES = {"bad_input": 2, "infeasible": 3, "internal": 4}
 """Exit codes of the command line: bad input, infeasible problem, internal error."""

@@ -9,25 +9,39 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clik.errors import InputError
+from clik.export import FORMATS, check_every, check_formats, joint_trajectory, write_trajectory
 from clik.io import atomic_write, write_json
+from clik.velocity_report import VelocityLimits, model_velocity_limits, velocity_report
 
 if TYPE_CHECKING:
     from clik.robot import Robot
 
-STATUSES = ("completed", "violated", "deadlock", "diverged", "converged", "max_iterations")
+STATUSES = (
+    "completed",
+    "violated",
+    "velocity_limit",
+    "deadlock",
+    "diverged",
+    "converged",
+    "max_iterations",
+)
 """Run statuses: ``completed`` (reached the end of the trajectory with no limit crossed),
 ``violated`` (reached the end, but a constraint's limit was crossed: see ``violations``),
-``deadlock`` (Remark 2: the law cannot reduce the task error, e.g. the task and the
-constraints conflict), ``diverged`` (a non-finite value, a joint step above the bound, or
-unstable gains), and for solve mode ``converged`` / ``max_iterations``."""
+``velocity_limit`` (reached the end with ``velocity_limits`` enabled, but a joint's speed
+stayed above its limit after re-timing: see :mod:`clik.velocity_limits`), ``deadlock``
+(Remark 2: the law cannot reduce the task error, e.g. the task and the constraints
+conflict), ``diverged`` (a non-finite value, a joint step above the bound, or unstable
+gains), and for solve mode ``converged`` / ``max_iterations``."""
 
-FAILED_STATUSES = ("violated", "deadlock", "diverged")
+FAILED_STATUSES = ("violated", "velocity_limit", "deadlock", "diverged")
 """Statuses of a run that did not do what was asked (``clik solve`` exits with 3)."""
 
 _ARRAYS = (
@@ -72,6 +86,9 @@ class TrackingResult:
             :mod:`clik.violations`.
         min_obstacle_distance: Minimum link-obstacle distance per sample (N,) [m], or None.
         info: Free-form metadata (robot, frame, law, gain, dt, ...), JSON-serialisable.
+        velocity_limits: The robot's joint velocity limits per velocity coordinate
+            (``model.velocityLimit``) [rad/s or m/s], taken from ``robot`` when not given;
+            saved with the result so a loaded result reports the same joint speeds.
     """
 
     t: np.ndarray
@@ -97,6 +114,11 @@ class TrackingResult:
     info: dict[str, Any] = field(default_factory=dict)
     extra: dict[str, np.ndarray] = field(default_factory=dict)
     robot: Robot | None = field(default=None, repr=False, compare=False)
+    velocity_limits: VelocityLimits | None = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.velocity_limits is None and self.robot is not None:
+            self.velocity_limits = model_velocity_limits(self.robot.model)
 
     @property
     def success(self) -> bool:
@@ -119,9 +141,46 @@ class TrackingResult:
         }
         if self.orientation_error_norm is not None and self.reference_position is not None:
             summary["max_orientation_error"] = float(np.max(self.orientation_error_norm))
+        speeds = velocity_report(
+            self.t, self.qdot, self.velocity_limits or VelocityLimits([], np.zeros(0))
+        )
+        summary["max_velocity_ratio"] = speeds.max_velocity_ratio
+        summary["velocity"] = speeds.records
         summary.update(self.info.get("summary_extra", {}))
         summary["info"] = {k: v for k, v in self.info.items() if k != "summary_extra"}
         return summary
+
+    def export(
+        self,
+        out: str | os.PathLike[str],
+        formats: str | Sequence[str] = FORMATS,
+        every: int = 1,
+        robot: Robot | None = None,
+    ) -> dict[str, Path]:
+        """Write the joint trajectory for a controller: ``trajectory.csv``, ``trajectory.json``.
+
+        See :mod:`clik.export` for the two formats, continuous joints and the
+        accelerations (``numpy.gradient`` of the recorded ``qdot`` over ``t``).
+
+        Args:
+            out: The output folder (created if missing).
+            formats: ``"csv"``, ``"json"``, or both.
+            every: Keep every ``every``-th recorded sample and the last (>= 1).
+            robot: The run's robot, for a result without one (loaded from a file).
+
+        Returns:
+            The file written per format.
+
+        Raises:
+            InputError: An unknown format, ``every`` not an integer >= 1, or no robot.
+            ExportError: A joint that is not revolute, prismatic or continuous.
+        """
+        formats, every = check_formats(formats), check_every(every)
+        robot = robot if robot is not None else self.robot
+        if robot is None:
+            raise InputError("robot", "the run's robot (this result has none: pass robot=...)")
+        trajectory = joint_trajectory(self.t, self.q, self.qdot, robot.model, every)
+        return write_trajectory(trajectory, Path(out), formats)
 
     # -- persistence -------------------------------------------------------------------
 
@@ -132,6 +191,9 @@ class TrackingResult:
         arrays.update({f"extra_{k}": v for k, v in self.extra.items()})
         arrays["joint_min"] = self.joint_min
         arrays["joint_max"] = self.joint_max
+        if self.velocity_limits is not None:
+            arrays["velocity_limit"] = self.velocity_limits.limit
+            arrays["velocity_names"] = np.array(self.velocity_limits.names, dtype=str)
         meta = {
             "status": self.status,
             "reason": self.reason,
@@ -155,11 +217,16 @@ class TrackingResult:
         meta = json.loads(str(arrays.pop("meta_json")))
         extra = {k[6:]: arrays.pop(k) for k in list(arrays) if k.startswith("extra_")}
         kwargs: dict[str, Any] = {name: arrays.get(name) for name in _ARRAYS}
+        limits = None
+        if "velocity_limit" in arrays and "velocity_names" in arrays:
+            names = [str(n) for n in arrays["velocity_names"]]
+            limits = VelocityLimits(names, arrays["velocity_limit"])
         return cls(
             **kwargs,
             joint_min=arrays["joint_min"],
             joint_max=arrays["joint_max"],
             extra=extra,
+            velocity_limits=limits,
             **meta,
         )
 

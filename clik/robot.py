@@ -1,6 +1,7 @@
 """A fixed-base robot: Pinocchio's kinematic and geometry models, loaded safely.
 
-:meth:`Robot.load` takes a URDF path, the name of one of clik's robots
+:meth:`Robot.load` takes a URDF path, a xacro path (``arm.urdf.xacro``, expanded
+by :func:`clik.xacro_expand.expand_xacro`), the name of one of clik's robots
 (``planar4r``) or an example-robot-data name (``panda``, ``ur5``, ...). Every
 URDF goes through :func:`clik.urdf_check.check_urdf` before Pinocchio reads it.
 The visual model is built on first use: meshes for display are slow to read
@@ -48,6 +49,7 @@ from clik.errors import (
     native_message,
 )
 from clik.urdf_check import check_urdf, parse_xml
+from clik.xacro_expand import check_xacro_args, expand_xacro, is_xacro
 
 PANDA_FINGERS = {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}
 """``lock`` for the Panda's fingers, closed: ``Robot.load("panda", lock=PANDA_FINGERS)``
@@ -148,8 +150,11 @@ class Robot:
 
     Attributes:
         name: The robot's name (ours or example-robot-data's, else the file stem).
-        source_path: The URDF file.
+        source_path: The URDF file (or the xacro file it was expanded from).
         package_dirs: Folders searched for ``package://`` meshes.
+        xacro_args: The xacro arguments given to :meth:`load` (empty for a URDF).
+        urdf_text: The URDF expanded from the xacro file ``source_path``, or None
+            for a URDF file (whatever reads the robot's URDF again uses this text).
         model: Pinocchio model (fixed base).
         data: Pinocchio data for ``model``.
         collision_model: Collision geometry (coal shapes).
@@ -182,6 +187,8 @@ class Robot:
         self._source_digest: str | None = None  # of the file as checked, see visual_model
         self.mimics: dict[str, Mimic] = {}
         self.locked: dict[str, float] = {}
+        self.xacro_args: dict[str, str] = {}
+        self.urdf_text: str | None = None
 
     # ------------------------------------------------------------------ loading
 
@@ -191,8 +198,9 @@ class Robot:
         source: str | Path,
         package_dirs: Sequence[str | Path] | None = None,
         lock: Mapping[str, float] | None = None,
+        xacro_args: Mapping[str, str] | None = None,
     ) -> Robot:
-        """Load a robot from a URDF file or by name.
+        """Load a robot from a URDF or xacro file, or by name.
 
         ``source`` is tried, in order, as an existing file, one of our robot
         names (:meth:`available`), then an example-robot-data name. The
@@ -201,13 +209,17 @@ class Robot:
         Pinocchio's neutral configuration clipped into the joint limits.
 
         Args:
-            source: A URDF path (relative to the working folder) or a robot name.
-            package_dirs: Folders holding the packages of ``package://`` meshes;
-                default: the URDF's folder and its two parents, never the
-                filesystem root (example-robot-data robots: the loader's own folder).
+            source: A URDF path (relative to the working folder), a xacro path
+                (name ending ``.xacro``) or a robot name.
+            package_dirs: Folders holding the packages of ``package://`` meshes
+                and of xacro's ``$(find pkg)``; default: the file's folder and its
+                two parents, never the filesystem root (example-robot-data
+                robots: the loader's own folder).
             lock: Joints to lock, with their value [rad or m], e.g.
                 ``{"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}``;
                 the models are reduced to the other joints.
+            xacro_args: Arguments of a xacro file, name -> value (strings), e.g.
+                ``{"n_links": "5"}``; only for a xacro ``source``.
 
         Mimic joints (URDF ``<mimic>``, e.g. the Panda's ``panda_finger_joint2``)
         are always locked, at ``multiplier * leader + offset`` (clipped into the
@@ -224,9 +236,13 @@ class Robot:
             UnknownRobotError: ``source`` is neither a file nor a known name.
             RobotLoadError: The file is missing or invalid (including a ``<mimic>``
                 with a non-numeric multiplier or offset, or mimic joints that
-                follow each other in a cycle).
+                follow each other in a cycle), or xacro cannot expand it (see
+                :func:`~clik.xacro_expand.expand_xacro`).
             JointNotFound: A joint in ``lock`` does not exist.
-            InputError: A lock value is not finite or outside the joint's limits.
+            InputError: A lock value is not finite or outside the joint's limits;
+                ``xacro_args`` for a source that is not a xacro file, or not
+                strings, or missing an argument the file needs; a ``$(find pkg)``
+                with no folder ``pkg`` in ``package_dirs``.
 
         Warns:
             MimicJointWarning: Mimic followers were locked while their leader is free.
@@ -234,21 +250,20 @@ class Robot:
         files = _source_files(source)
         urdf = files.urdf
         dirs = [str(d) for d in (files.package_dirs if package_dirs is None else package_dirs)]
+        args = check_xacro_args(xacro_args)
+        if args and not is_xacro(urdf):
+            raise InputError("xacro_args", "a xacro source (a file ending in .xacro)", str(source))
+        text = expand_xacro(urdf, args, dirs) if is_xacro(urdf) else None
 
-        root = check_urdf(urdf, dirs)
+        root = check_urdf(urdf, dirs, text)
         mimics = _mimic_joints(root, urdf)
-        digest = _digest(urdf)
-        try:
-            model, collision_model = pin.buildModelsFromUrdf(
-                str(urdf), package_dirs=dirs, geometry_types=[pin.COLLISION]
-            )
-        except (ValueError, RuntimeError) as error:
-            problem = f"Pinocchio cannot build the model: {native_message(error)}"
-            raise RobotLoadError(urdf, problem) from None
+        digest = _digest(urdf) if text is None else None  # xacro: the text is kept
+        model, collision_model = _build_models(urdf, dirs, text)
         q_reference = _reference_configuration(model, files.srdf, files.posture)
         robot = cls(files.name, urdf.resolve(), dirs, model, collision_model, q_reference)
         robot._source_digest = digest
         robot.mimics = mimics
+        robot.xacro_args, robot.urdf_text = args, text
         names = robot.joint_names
         followers = [f for f, m in mimics.items() if f in names and m.leader in names]
         return robot._locked(dict(lock or {}), mimics) if lock or followers else robot
@@ -290,6 +305,7 @@ class Robot:
         robot._reduction = (self.model, sorted(joint_ids), q_full)
         robot._source_digest = self._source_digest
         robot.mimics = dict(self.mimics)
+        robot.xacro_args, robot.urdf_text = dict(self.xacro_args), self.urdf_text
         robot.locked = values
         return robot
 
@@ -397,7 +413,8 @@ class Robot:
         """Visual geometry, read from the URDF on first use (slow for meshes).
 
         Empty when the robot has no source file. The file is read again only if
-        it is still the one checked by :meth:`load`.
+        it is still the one checked by :meth:`load`; a robot expanded from xacro
+        reads its :attr:`urdf_text` instead.
 
         Raises:
             RobotLoadError: The URDF was removed or changed since the robot was
@@ -419,9 +436,14 @@ class Robot:
                 "(its visual geometry is read on first use); load the robot again",
             )
         try:
-            visual = pin.buildGeomFromUrdf(
-                self._full_model, str(path), pin.VISUAL, package_dirs=self.package_dirs
-            )
+            if self.urdf_text is not None:
+                visual = pin.buildGeomFromUrdfString(
+                    self._full_model, self.urdf_text, pin.VISUAL, package_dirs=self.package_dirs
+                )
+            else:
+                visual = pin.buildGeomFromUrdf(
+                    self._full_model, str(path), pin.VISUAL, package_dirs=self.package_dirs
+                )
         except (ValueError, RuntimeError) as error:
             problem = f"Pinocchio cannot read the visual geometry: {native_message(error)}"
             raise RobotLoadError(path, problem) from None
@@ -745,6 +767,35 @@ def _mimic_joints(root: etree._Element, urdf: Path) -> dict[str, Mimic]:
     return mimics
 
 
+def _build_models(
+    urdf: Path, package_dirs: list[str], text: str | None
+) -> tuple[pin.Model, pin.GeometryModel]:
+    """Pinocchio's model and collision model of the file ``urdf``, or of ``text``.
+
+    Args:
+        urdf: The URDF file (named in errors).
+        package_dirs: Folders for ``package://`` and relative mesh files.
+        text: The URDF expanded from the xacro file ``urdf``, or None to read ``urdf``.
+
+    Raises:
+        RobotLoadError: Pinocchio refuses the description.
+    """
+    try:
+        if text is None:
+            model, collision_model = pin.buildModelsFromUrdf(
+                str(urdf), package_dirs=package_dirs, geometry_types=[pin.COLLISION]
+            )
+        else:
+            model = pin.buildModelFromXML(text)
+            collision_model = pin.buildGeomFromUrdfString(
+                model, text, pin.COLLISION, package_dirs=package_dirs
+            )
+    except (ValueError, RuntimeError) as error:
+        problem = f"Pinocchio cannot build the model: {native_message(error)}"
+        raise RobotLoadError(urdf, problem) from None
+    return model, collision_model
+
+
 def _q_slice(model: pin.Model, joint_id: int) -> slice:
     """The configuration values of one joint."""
     joint = model.joints[joint_id]
@@ -841,9 +892,10 @@ def _source_files(source: str | Path) -> _SourceFiles:
         UnknownRobotError: ``source`` is neither a file nor a known name.
     """
     source_str = str(source)
-    if Path(source).is_file() or Path(source).suffix == ".urdf" or "/" in source_str:
-        urdf = Path(source)
-        return _SourceFiles(urdf.stem, urdf, _parent_dirs(urdf))
+    path = Path(source)
+    if path.is_file() or path.suffix in (".urdf", ".xacro") or "/" in source_str:
+        name = Path(path.name.removesuffix(".xacro")).stem if is_xacro(path) else path.stem
+        return _SourceFiles(name, path, _parent_dirs(path))
     ours = _our_robots()
     if source_str in ours:
         return _SourceFiles(source_str, ours[source_str], [ours[source_str].parent])

@@ -27,14 +27,21 @@ from clik.reach import reach_bound
 from clik.result import TrackingResult
 from clik.robot import Robot
 from clik.scenario import Scenario, load_scenario
+from clik.speed_limits import SpeedLimits
 from clik.task import Task
 from clik.tracking import ProgressCallback, Tracker
 from clik.trajectory import Circle, Hold, Line, PoseTrajectory, Slerp, Trajectory, Waypoints
+from clik.velocity_limits import run_within_limits
 
 
 @dataclass
 class Run:
-    """Everything a scenario builds: robot, task, trajectory, tracker and start."""
+    """Everything a scenario builds: robot, task, trajectory, tracker and start.
+
+    ``speed_limits`` is set when ``[constraints.velocity_limits]`` is enabled: the run
+    is then re-timed until the joint speeds are within limits
+    (:func:`clik.velocity_limits.run_within_limits`).
+    """
 
     scenario: Scenario
     robot: Robot
@@ -42,20 +49,25 @@ class Run:
     trajectory: Trajectory
     tracker: Tracker
     q0: np.ndarray
+    speed_limits: SpeedLimits | None = None
 
     def execute(self, progress: ProgressCallback | None = None) -> TrackingResult:
-        """Run the tracking loop."""
-        result = self.tracker.run(
-            self.trajectory,
-            self.q0,
-            record_every=self.scenario.solver["record_every"],
-            settle=self.scenario.solver["settle"],
-            progress=progress,
-        )
+        """Run the tracking loop (in re-timing passes when ``speed_limits`` is set)."""
+        solver = self.scenario.solver
+        kwargs = {"record_every": solver["record_every"], "settle": solver["settle"]}
+        if self.speed_limits is None:
+            result = self.tracker.run(self.trajectory, self.q0, progress=progress, **kwargs)
+        else:
+            result = run_within_limits(
+                self.tracker, self.trajectory, self.q0, self.speed_limits, progress=progress,
+                **kwargs,
+            )  # fmt: skip
         result.info["scenario"] = self.scenario.name
         result.info["scenario_file"] = str(self.scenario.file.resolve())
         result.info["robot_source"] = self.scenario.robot["source"]
         result.info["robot_lock"] = dict(self.scenario.robot["lock"])
+        if self.scenario.robot.get("xacro_args"):
+            result.info["robot_xacro_args"] = dict(self.scenario.robot["xacro_args"])
         return result
 
 
@@ -65,6 +77,15 @@ def _where(scenario: Scenario, key: str, exc: ClikError) -> ScenarioError:
     if field and message.startswith(f"{field}: "):  # do not repeat the field
         message = message[len(field) + 2 :]
     return ScenarioError(scenario.file, key, message)
+
+
+def _robot_key(exc: ClikError) -> str:
+    """The ``[robot]`` key a robot's loading error is about (``lock`` unless it says)."""
+    field = str(getattr(exc, "field", ""))
+    for key in ("xacro_args", "package_dirs"):
+        if field.startswith(key):
+            return f"robot.{key}"
+    return "robot.lock"
 
 
 def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
@@ -81,10 +102,13 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
     if robot is None:
         try:
             robot = Robot.load(
-                spec["source"], package_dirs=spec["package_dirs"] or None, lock=spec["lock"] or None
+                spec["source"],
+                package_dirs=spec["package_dirs"] or None,
+                lock=spec["lock"] or None,
+                xacro_args=spec.get("xacro_args") or None,
             )
         except (JointNotFound, InputError) as exc:
-            raise _where(scenario, "robot.lock", exc) from None
+            raise _where(scenario, _robot_key(exc), exc) from None
         except ClikError as exc:
             raise _where(scenario, "robot.source", exc) from None
     try:
@@ -129,7 +153,24 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
         )
     except InputError as exc:
         raise _where(scenario, f"solver.{exc.field}", exc) from None
-    return Run(scenario, robot, task, trajectory, tracker, q0)
+    return Run(scenario, robot, task, trajectory, tracker, q0, _speed_limits(scenario, robot))
+
+
+def _speed_limits(scenario: Scenario, robot: Robot) -> SpeedLimits | None:
+    """The scenario's ``[constraints.velocity_limits]``, checked against the robot (or None)."""
+    spec = scenario.velocity_limits
+    if not spec.get("enabled"):
+        return None
+    key = "constraints.velocity_limits"
+    settings = {k: spec[k] for k in ("scale", "acceleration", "margin", "max_passes", "window")}
+    try:
+        limits = SpeedLimits(**settings)
+        limits.bounds(robot)  # an unknown joint or a robot without limits: now, not after a run
+    except JointNotFound as exc:
+        raise _where(scenario, f"{key}.acceleration", exc) from None
+    except InputError as exc:
+        raise _where(scenario, exc.field.replace("velocity_limits", key, 1), exc) from None
+    return limits
 
 
 def _check_goal_reach(scenario: Scenario, robot: Robot, task: Task) -> None:

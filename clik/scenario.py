@@ -19,7 +19,8 @@ to pick per joint.
 A scenario is data only: TOML has no code, no includes and no variables, and
 no key here names a file to read but ``robot.source``, ``robot.package_dirs``
 and an obstacle's mesh ``file``: paths the user chose (absolute, or relative
-to the scenario's folder; URLs are refused, nothing is fetched).
+to the scenario's folder; URLs are refused, nothing is fetched). A xacro
+``robot.source`` (``.xacro``) takes ``robot.xacro_args``, a table of strings.
 """
 
 from __future__ import annotations
@@ -37,6 +38,8 @@ from clik.engine import ENGINES
 from clik.errors import ClikError, ScenarioError
 from clik.robot import JointValues
 from clik.schema import Table
+from clik.speed_limits import MAX_PASSES, MAX_SCALE
+from clik.xacro_expand import is_xacro
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -79,6 +82,9 @@ class Scenario:
     solver: dict[str, Any]
     obstacles: list[dict[str, Any]] = field(default_factory=list)
     constraints: dict[str, Any] = field(default_factory=dict)
+    velocity_limits: dict[str, Any] = field(default_factory=dict)
+    """The ``[constraints.velocity_limits]`` table (:func:`_velocity_limits`), kept apart from
+    ``constraints`` because it adds no constraint row: it re-times the reference."""
     raw: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
@@ -115,17 +121,7 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
     top = Table(data, file)
     name = top.string("name", file.stem)
 
-    rob = top.table("robot", required=True)
-    source = rob.string("source")
-    if "://" in source:
-        raise rob.error("source", "a robot name or a URDF path (URLs are not fetched)", source)
-    looks_like_path = source.endswith(".urdf") or "/" in source or "\\" in source
-    robot = {
-        "source": _resolve(folder, source) if looks_like_path else source,
-        "package_dirs": [_resolve(folder, p) for p in _strings(rob, "package_dirs")],
-        "lock": rob.mapping("lock", lambda t, k: float(t.number(k))),
-    }
-    rob.done()
+    robot = _robot(top.table("robot", required=True), folder)
 
     ini = top.table("initial")
     unit = ini.string("unit", "rad", UNITS)
@@ -182,10 +178,32 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
     if len(set(names)) != len(names):
         raise ScenarioError(file, "obstacles", f"expected distinct obstacle names, got {names}")
     constraints = _constraints(top.table("constraints"))
+    velocity_limits = constraints.pop("velocity_limits")
     top.done()
     return Scenario(
-        file, name, robot, initial_q, task, trajectory, solver, obstacles, constraints, raw=data
-    )
+        file, name, robot, initial_q, task, trajectory, solver, obstacles, constraints,
+        velocity_limits=velocity_limits, raw=data,
+    )  # fmt: skip
+
+
+def _robot(rob: Table, folder: Path) -> dict[str, Any]:
+    """The ``[robot]`` table: ``source``, ``package_dirs``, ``lock``, ``xacro_args``."""
+    source = rob.string("source")
+    if "://" in source:
+        raise rob.error("source", "a robot name or a URDF path (URLs are not fetched)", source)
+    looks_like_path = source.endswith((".urdf", ".xacro")) or "/" in source or "\\" in source
+    robot = {
+        "source": _resolve(folder, source) if looks_like_path else source,
+        "package_dirs": [_resolve(folder, p) for p in _strings(rob, "package_dirs")],
+        "lock": rob.mapping("lock", lambda t, k: float(t.number(k))),
+        "xacro_args": rob.mapping("xacro_args", lambda t, k: t.string(k)),
+    }
+    if robot["xacro_args"] and not is_xacro(source):
+        raise rob.error(
+            "xacro_args", "no xacro_args: robot.source is not a xacro file (name ending .xacro)"
+        )
+    rob.done()
+    return robot
 
 
 def _strings(table: Table, name: str) -> list[str]:
@@ -315,10 +333,50 @@ def _constraints(ct: Table) -> dict[str, Any]:
         "gain": sc.number("gain", None, minimum=0.0, strict=True, unit="[1/s]"),
     }
     sc.done()
+    out["velocity_limits"] = _velocity_limits(ct.table("velocity_limits"))
     out["release"] = ct.string("release", "projection", ("projection", "sign"))
     out["hysteresis"] = ct.number("hysteresis", 0.0, minimum=0.0)
     out["max_active"] = ct.number("max_active", None, minimum=0, integer=True)
     ct.done()
+    return out
+
+
+def _velocity_limits(vl: Table) -> dict[str, Any]:
+    """``[constraints.velocity_limits]``: respect the URDF joint speed limits (time scaling).
+
+    Keys: ``enabled`` (default false), ``scale`` (fraction of the URDF velocity limit,
+    ``0 < scale <= 10``, default 1), ``acceleration`` (one limit for every joint or a
+    table joint -> limit [rad/s^2 or m/s^2]; default none), ``margin`` (in [0, 1],
+    default 0.05), ``max_passes`` (1..20, default 6), ``window`` ([s], default 0.05).
+    Checked whether enabled or not.
+    """
+    accel_unit = "[rad/s^2 or m/s^2]"
+    scale = vl.number("scale", 1.0, minimum=0.0, strict=True)
+    if scale > MAX_SCALE:
+        raise vl.error("scale", f"a number > 0 and <= {MAX_SCALE:g} (of the URDF limit)", scale)
+    acceleration = vl.raw("acceleration", None)
+    if isinstance(acceleration, dict):
+        acceleration = vl.mapping(
+            "acceleration",
+            lambda t, k: float(t.number(k, minimum=0.0, strict=True, unit=accel_unit)),
+        )
+    elif acceleration is not None:
+        acceleration = float(vl.number("acceleration", minimum=0.0, strict=True, unit=accel_unit))
+    margin = vl.number("margin", 0.05, minimum=0.0)
+    if margin > 1.0:
+        raise vl.error("margin", "a number in [0, 1]", margin)
+    passes = vl.number("max_passes", 6, minimum=1, integer=True)
+    if passes > MAX_PASSES:
+        raise vl.error("max_passes", f"an integer in 1..{MAX_PASSES}", passes)
+    out = {
+        "enabled": vl.boolean("enabled", False),
+        "scale": float(scale),
+        "acceleration": acceleration,
+        "margin": float(margin),
+        "max_passes": int(passes),
+        "window": float(vl.number("window", 0.05, minimum=0.0, strict=True, unit="[s]")),
+    }
+    vl.done()
     return out
 
 

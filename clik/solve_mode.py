@@ -14,6 +14,14 @@ configuration inside the limits, up to ``restarts`` times.
 This module is the readable specification; ``engine="compiled"`` (the default)
 runs the same iteration in C++ (``src/engine/solve.cpp``), with the same
 restart configurations drawn here from the same seed.
+
+With ``constraints=`` (a :class:`~clik.constraints.ConstraintSet`, obstacles at
+rest) the solve above runs first and its pose is checked with coal against every
+obstacle threshold (13) and joint-range band (17); a pose that misses one is
+looked for again with law (10) on the extended task (23)-(25) toward the held
+target, from seeded starts, and a failure names the blocking constraint
+(:mod:`clik.constrained_solve`, docs/method.md "Solve mode with constraints").
+Without constraints nothing of that runs: the same iteration, the same speed.
 """
 
 from __future__ import annotations
@@ -31,42 +39,14 @@ import pinocchio as pin
 
 from clik.errors import InputError
 from clik.laws import LawName, check_law, solve_small
+from clik.solve_result import SolveResult
 from clik.task import Task
 
 if TYPE_CHECKING:
+    from clik.constraints import ConstraintSet
     from clik.robot import Robot
 
 EngineName = Literal["compiled", "python"]
-
-
-@dataclass(frozen=True)
-class SolveResult:
-    """Outcome of :func:`solve`.
-
-    Attributes:
-        success: True when both tolerances were met.
-        reason: Why the solver stopped, in words.
-        q: Final configuration (nq,).
-        iterations: Iterations over all attempts.
-        attempts: Number of attempts (1 + restarts used).
-        position_error: Final position error norm [m] (0 without position rows).
-        orientation_error: Final orientation error norm [rad] (0 without orientation rows).
-        wall_time_s: Wall time [s].
-    """
-
-    success: bool
-    reason: str
-    q: np.ndarray
-    iterations: int
-    attempts: int
-    position_error: float
-    orientation_error: float
-    wall_time_s: float
-
-    @property
-    def status(self) -> str:
-        """``"converged"`` or ``"max_iterations"``."""
-        return "converged" if self.success else "max_iterations"
 
 
 def _target_arrays(target: object) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -450,6 +430,8 @@ def solve(
     restarts: int = 50,
     seed: int | None = 0,
     engine: EngineName = "compiled",
+    constraints: ConstraintSet | None = None,
+    tracking_attempts: int = 4,
 ) -> SolveResult:
     """Iterate a CLIK law until the task error is within tolerance.
 
@@ -469,10 +451,26 @@ def solve(
         engine: ``"compiled"`` (default) runs the iteration in clik's C++ engine;
             ``"python"`` runs the code of this module. Both give the same results
             (the same restarts from the same seed; ``q`` equal to rounding).
+        constraints: Obstacle, joint-range and link-pair constraints (the
+            :class:`~clik.constraints.ConstraintSet` :func:`clik.track` takes), obstacles
+            at rest. The pose returned on success keeps every monitored link at least its
+            obstacle's threshold away and every joint at least ``d_q`` inside its range
+            (checked with coal); a failure's ``reason`` and ``blocked_by`` name the
+            constraint that blocks the target. None (default): no constraint, no check.
+            See :mod:`clik.constrained_solve`.
+        tracking_attempts: With ``constraints``, the starts of the constrained law (10)
+            tried when the unconstrained pose misses a constraint.
 
     Raises:
         InputError: A bad argument, named.
     """
+    if constraints is not None:
+        given: dict[str, Any] = {
+            "law": law, "step": step, "damping": damping, "mu": mu, "tolerance": tolerance,
+            "orientation_tolerance": orientation_tolerance, "max_iterations": max_iterations,
+            "restarts": restarts, "seed": seed, "engine": engine,
+        }  # fmt: skip
+        return _solve_with_constraints(task, target, q0, constraints, tracking_attempts, given)
     if engine == "compiled":
         # The cache key of the settings: their values, and the integers' types (equal
         # keys pass or fail the checks alike: 100.0 iterations are refused, 100 not).
@@ -488,8 +486,16 @@ def solve(
         max_iterations, restarts,
     )  # fmt: skip
     _check_settings(settings)
+    return _solve_python(task, target, q0, settings, seed)
+
+
+def _solve_python(
+    task: Task, target: object, q0: object, settings: _Settings, seed: int | None
+) -> SolveResult:
+    """:func:`solve` in Python: the first attempt from ``q0``, then seeded restarts."""
     problem = _Problem(task, target, settings)
     robot = task.robot
+    restarts = settings.restarts
     q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
     rng = None  # created at the first restart (it costs ~20 us)
     iterations = 0
@@ -512,3 +518,29 @@ def solve(
     reason = _failure_reason(restarts + 1, iterations, pos, rot)
     elapsed = time.perf_counter() - start
     return SolveResult(False, reason, best_q, iterations, restarts + 1, pos, rot, elapsed)
+
+
+def _solve_with_constraints(
+    task: Task,
+    target: object,
+    q0: object,
+    constraints: ConstraintSet,
+    tracking_attempts: int,
+    settings: dict[str, Any],
+) -> SolveResult:
+    """:func:`solve` with constraints (:func:`clik.constrained_solve.solve_constrained`)."""
+    from clik.constrained_solve import solve_constrained
+
+    checked = _checked_target(task, target)
+    robot = task.robot
+    q_start = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
+
+    def unconstrained(q: np.ndarray) -> SolveResult:
+        return solve(task, target, q, **settings)
+
+    return solve_constrained(
+        task, checked, q_start, constraints, unconstrained,
+        tolerances=(settings["tolerance"], settings["orientation_tolerance"]),
+        damping=settings["damping"], tracking_attempts=tracking_attempts,
+        seed=settings["seed"], engine=settings["engine"],
+    )  # fmt: skip

@@ -35,7 +35,7 @@ _XINCLUDE = "{http://www.w3.org/2001/XInclude}"
 _DOCTYPE = re.compile(rb"<!DOCTYPE\s+[^\s\[>]+\s*([^\[>]*)")
 
 
-def parse_xml(path: str | Path) -> etree._ElementTree:
+def parse_xml(path: str | Path, data: bytes | None = None) -> etree._ElementTree:
     """Parse an XML file strictly, without reading any other file.
 
     The raw bytes are scanned first: entity declarations and external DTD
@@ -47,6 +47,8 @@ def parse_xml(path: str | Path) -> etree._ElementTree:
 
     Args:
         path: The XML file.
+        data: The document's bytes when they are not read from ``path`` (e.g. a
+            URDF expanded from xacro); ``path`` then only names it in errors.
 
     Returns:
         The parsed document.
@@ -57,10 +59,11 @@ def parse_xml(path: str | Path) -> etree._ElementTree:
             XInclude element.
     """
     path = Path(path)
-    if not path.is_file():
-        problem = "is a folder, not a file" if path.is_dir() else "file not found"
-        raise RobotLoadError(path, problem)
-    data = path.read_bytes()
+    if data is None:
+        if not path.is_file():
+            problem = "is a folder, not a file" if path.is_dir() else "file not found"
+            raise RobotLoadError(path, problem)
+        data = path.read_bytes()
     if not data.strip():
         raise RobotLoadError(path, "file is empty")
     entity = _ENTITY.search(data)
@@ -98,7 +101,9 @@ def parse_xml(path: str | Path) -> etree._ElementTree:
     return tree
 
 
-def check_urdf(path: str | Path, package_dirs: Sequence[str | Path] = ()) -> etree._Element:
+def check_urdf(
+    path: str | Path, package_dirs: Sequence[str | Path] = (), text: str | None = None
+) -> etree._Element:
     """Check that a URDF file describes a valid kinematic tree.
 
     Checks, in order: strict XML (see :func:`parse_xml`); a ``<robot>`` root;
@@ -115,6 +120,10 @@ def check_urdf(path: str | Path, package_dirs: Sequence[str | Path] = ()) -> etr
     Args:
         path: The URDF file.
         package_dirs: Folders holding the packages named by ``package://`` URIs.
+        text: The URDF itself when it is not the content of ``path``: the
+            expansion of the xacro file ``path`` (relative mesh files are still
+            relative to its folder; errors name it "as expanded by xacro", with
+            lines of the expanded text).
 
     Returns:
         The ``<robot>`` element.
@@ -123,10 +132,12 @@ def check_urdf(path: str | Path, package_dirs: Sequence[str | Path] = ()) -> etr
         RobotLoadError: The first problem found, with its line when known.
     """
     path = Path(path)
-    root = parse_xml(path).getroot()
+    source = path if text is None else Path(f"{path} (as expanded by xacro)")
+    root = parse_xml(source, None if text is None else text.encode("utf-8")).getroot()
 
     def fail(problem: str, element: etree._Element | None = None) -> RobotLoadError:
-        return RobotLoadError(path, problem, line=None if element is None else element.sourceline)
+        line = None if element is None else element.sourceline
+        return RobotLoadError(source, problem, line=line)
 
     if root.tag != "robot":
         raise fail(f"the root element is <{root.tag}>, expected <robot>", root)

@@ -66,8 +66,10 @@ from clik.robot import Robot
 from clik.runner import build, run_scenario
 from clik.scenarios import scenario_path
 from clik.trajectory import Hold, Line
+from clik.velocity_limits import track_within_limits
 
 DATA = Path(__file__).parent / "data"
+ARM_XACRO = DATA / "xacro" / "clik_xacro_demo" / "urdf" / "arm.urdf.xacro"
 CASE = scenario_path("case_study_both").read_text()
 Q0 = np.radians([180.0, -30.0, -90.0, -30.0])
 GOAL = [0.8, -0.2, 0.0]
@@ -79,6 +81,18 @@ def with_link_geometry(geometry: str, inertial: str = "") -> str:
         f'<link name="l1">{inertial}<collision><geometry>{geometry}</geometry></collision></link>'
     )
     return urdf_text(LINKS.replace('<link name="l1"/>', link) + J1 + J2)
+
+
+def xacro_file(env: Env, body: str) -> Path:
+    """A xacro robot (``pkg/urdf/r.urdf.xacro``): the small URDF with ``body`` added."""
+    text = urdf_text(LINKS + J1 + J2 + body).replace(
+        '<robot name="r">', '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+    )
+    return env.file(text, "pkg/urdf/r.urdf.xacro")
+
+
+XACRO_ARG_MASS = '<link name="c"><inertial><mass value="$(arg mass)"/></inertial></link>'
+"""A xacro body that needs the argument ``mass`` (declared nowhere, no default)."""
 
 
 # ------------------------------------------------------------------ expectations
@@ -230,6 +244,30 @@ def driven_back(result: clik.TrackingResult) -> None:
     assert result.events[0]["constraint"] == "joint:joint3:upper"
     assert result.events[0]["t"] == 0.0
     assert result.q[-1, 2] <= np.radians(-80.0) + 1e-6
+
+
+def velocity_section(env: Env, body: str) -> Path:
+    """The case study with a ``[constraints.velocity_limits]`` table holding ``body``."""
+    section = f"[constraints.velocity_limits]\n{body}\n\n[constraints.obstacles]"
+    return env.scenario("[constraints.obstacles]", section)
+
+
+def no_velocity_limits(env: Env) -> Path:
+    """A one-joint URDF whose joint has ``velocity="0"`` (no limit), velocity limits enabled."""
+    urdf = env.file(urdf_text(LINKS + J1.replace('velocity="1"', 'velocity="0"') + J2))
+    text = (
+        f'[robot]\nsource = "{urdf}"\n[task]\nframe = "l2"\nkind = "position"\n'
+        '[trajectory]\nkind = "hold"\nduration = 0.1\n'
+        "[constraints.velocity_limits]\nenabled = true\n"
+    )
+    return env.file(text, "s.toml")
+
+
+def error_correction_too_fast(env: Env) -> clik.TrackingResult:
+    """A line starting 5 cm from the tip with K = 500: K e alone exceeds the speed limits."""
+    start = env.task().placement(Q0).translation + [0.05, 0.0, 0.0]
+    line = Line(start, GOAL, duration=1.0)
+    return track_within_limits(env.task(), line, q0=Q0, law="pseudoinverse", gain=500.0)
 
 
 def visual_model_after(env: Env, change: str) -> None:
@@ -425,6 +463,34 @@ URDF = [
         Raises(InputError, ["lock['joint2']", "within the joint's limits [-3.14159, 3.14159]"]),
         id="robot-lock-outside-limits",
     ),
+    pytest.param(
+        lambda env: Robot.load(xacro_file(env, XACRO_ARG_MASS)),
+        Raises(InputError, ["xacro_args", "the xacro argument 'mass'", "declares no default"]),
+        id="xacro-missing-arg",
+    ),
+    pytest.param(
+        lambda env: Robot.load(ARM_XACRO, package_dirs=[env.tmp]),
+        Raises(InputError, ["package_dirs", "'clik_xacro_demo'", "package folders searched"]),
+        id="xacro-unknown-package",
+    ),
+    pytest.param(
+        lambda env: Robot.load(
+            xacro_file(env, '<xacro:include filename="../../secret.xacro"/>'),
+            package_dirs=[env.tmp],
+        ),
+        Raises(RobotLoadError, ["secret.xacro", "leaves the folders a xacro file may read"]),
+        id="xacro-include-leaves-package",
+    ),
+    pytest.param(
+        lambda env: Robot.load(xacro_file(env, '<link name="c" v="${nothere}"/>')),
+        Raises(RobotLoadError, ["r.urdf.xacro", "xacro cannot expand it", "'nothere'"]),
+        id="xacro-undefined-property",
+    ),
+    pytest.param(
+        lambda env: Robot.load(env.file(urdf_text()), xacro_args={"n": "1"}),
+        Raises(InputError, ["xacro_args", "a xacro source"]),
+        id="xacro-args-on-plain-urdf",
+    ),
 ]
 
 SCENARIO = [
@@ -589,6 +655,22 @@ SCENARIO = [
         id="scenario-url-robot",
     ),
     pytest.param(
+        lambda env: build(
+            env.scenario(
+                'source = "planar4r"', f'source = "{ARM_XACRO}"\nxacro_args = {{ n_links = 7 }}'
+            )
+        ),
+        Raises(ScenarioError, ["robot.xacro_args.n_links: expected a string, got 7"]),
+        id="scenario-xacro-arg-not-string",
+    ),
+    pytest.param(
+        lambda env: build(
+            env.scenario('source = "planar4r"', f'source = "{xacro_file(env, XACRO_ARG_MASS)}"')
+        ),
+        Raises(ScenarioError, ["robot.xacro_args", "the xacro argument 'mass'"]),
+        id="scenario-xacro-missing-arg",
+    ),
+    pytest.param(
         lambda env: build(env.scenario("q = [180, -30, -90, -30]", "q = [180, -30, -90]")),
         Raises(ScenarioError, ["initial.q", "an array of 4 finite joint values"]),
         id="scenario-initial-q-length",
@@ -602,6 +684,63 @@ SCENARIO = [
         lambda env: build(env.scenario("dt = 0.001", "dt = 1e-9")),
         Raises(ScenarioError, ["solver.dt: expected a step giving at most 1e+08 steps", "3 s"]),
         id="scenario-too-many-steps",
+    ),
+    pytest.param(
+        lambda env: build(velocity_section(env, "enabled = true\nscale = 0")),
+        Raises(ScenarioError, ["constraints.velocity_limits.scale: expected a number > 0, got 0"]),
+        id="scenario-velocity-limits-scale-zero",
+    ),
+    pytest.param(
+        lambda env: build(velocity_section(env, "enabled = true\nscale = -1")),
+        Raises(ScenarioError, ["constraints.velocity_limits.scale: expected a number > 0, got -1"]),
+        id="scenario-velocity-limits-scale-negative",
+    ),
+    pytest.param(
+        lambda env: build(velocity_section(env, 'enabled = true\nscale = "a"')),
+        Raises(
+            ScenarioError, ["constraints.velocity_limits.scale: expected a number > 0, got 'a'"]
+        ),
+        id="scenario-velocity-limits-scale-not-a-number",
+    ),
+    pytest.param(
+        lambda env: build(velocity_section(env, "enabled = true\nscale = 11.0")),
+        Raises(ScenarioError, ["constraints.velocity_limits.scale", "<= 10", "got 11.0"]),
+        id="scenario-velocity-limits-scale-above-ten",
+    ),
+    pytest.param(
+        lambda env: build(velocity_section(env, "enabled = true\nspeed = 2.0")),
+        Raises(
+            ScenarioError,
+            [
+                "constraints.velocity_limits.speed: unknown key; valid keys here: acceleration, "
+                "enabled, margin, max_passes, scale, window"
+            ],
+        ),
+        id="scenario-velocity-limits-unknown-key",
+    ),
+    pytest.param(
+        lambda env: build(velocity_section(env, "enabled = true\nacceleration = 0")),
+        Raises(
+            ScenarioError,
+            ["constraints.velocity_limits.acceleration: expected a number > 0 [rad/s^2 or m/s^2]"],
+        ),
+        id="scenario-velocity-limits-acceleration-zero",
+    ),
+    pytest.param(
+        lambda env: build(velocity_section(env, "enabled = true\nacceleration = { joint9 = 1.0 }")),
+        Raises(
+            ScenarioError,
+            ["constraints.velocity_limits.acceleration", "joint 'joint9' not found", "'joint1'"],
+        ),
+        id="scenario-velocity-limits-acceleration-unknown-joint",
+    ),
+    pytest.param(
+        lambda env: build(no_velocity_limits(env)),
+        Raises(
+            ScenarioError,
+            ["constraints.velocity_limits.enabled", "has none", "nothing to respect"],
+        ),
+        id="scenario-velocity-limits-robot-without-limits",
     ),
 ]
 
@@ -799,6 +938,11 @@ INFEASIBLE = [
         Ends(["diverged", "deadlock"], ["t = "], seconds=5.0),
         id="goal-unreachable-track",
     ),
+    pytest.param(
+        error_correction_too_fast,
+        Ends(["velocity_limit"], ["joint speed limits not respected", "x its velocity limit at t"]),
+        id="velocity-limit-error-correction",
+    ),
 ]
 
 CLI = [
@@ -823,6 +967,18 @@ CLI = [
         ),
         Exits(2, ["robot.source", "several root links"]),
         id="cli-bad-urdf",
+    ),
+    pytest.param(
+        lambda env: env.cli(
+            "solve",
+            str(
+                env.scenario('source = "planar4r"', f'source = "{xacro_file(env, XACRO_ARG_MASS)}"')
+            ),
+            "--out",
+            out(env),
+        ),
+        Exits(2, ["robot.xacro_args", "the xacro argument 'mass'"]),
+        id="cli-xacro-missing-arg",
     ),
     pytest.param(
         lambda env: env.cli(

@@ -36,7 +36,7 @@ What is measured (all through clik's public API, on the machine it runs on):
 
 Fairness: the compared step variants run interleaved, one whole run of each per
 round (the order rotates every round) after one warm-up run each, and the solve
-benchmark rotates clik's two engines and pink target by target. Figures are
+benchmark rotates clik's two engines and pink in blocks of 25 targets. Figures are
 medians over rounds (or targets) with p10 and p90; ratios (``ratios`` in
 ``bench.json``) are pink's median, or the Python engine's, over the compiled
 engine's median from the same rounds.

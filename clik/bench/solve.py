@@ -3,8 +3,11 @@
 The targets are the hand's poses at seeded random configurations inside the
 joint limits; every solver starts from the reference configuration and is
 checked independently of any (:mod:`clik.bench.pose_error`). clik's compiled
-engine, its Python engine and pink take turns target by target (which goes
-first rotates too).
+engine, its Python engine and pink take turns block by block (:data:`BLOCK`
+targets each; which goes first rotates too): drift in the machine's load
+reaches all three alike, and each solver runs a block with its own code and data
+in the caches, as a caller solving many poses (a reach map) runs it, rather than
+after the other two evicted them at every target.
 """
 
 from __future__ import annotations
@@ -97,9 +100,12 @@ def _time_pink(s: _Solvers, pink_solve: PinkSolve, target: pin.SE3, rec: _Record
 SOLVERS = ("compiled", "python", "pink")
 """The solvers of the benchmark: clik.solve in each engine, and pink."""
 
+BLOCK = 25
+"""Targets a solver runs in a row before the next solver takes its turn."""
+
 
 def _alternate(s: _Solvers, targets: list[pin.SE3], log: Log) -> tuple[_Record, _Record, _Record]:
-    """Every solver on every target, the first of them rotating from target to target.
+    """Every solver on every target, in turns of :data:`BLOCK` targets, the first rotating.
 
     Returns:
         The records of clik's compiled engine, of its Python engine and of pink.
@@ -109,17 +115,19 @@ def _alternate(s: _Solvers, targets: list[pin.SE3], log: Log) -> tuple[_Record, 
     if s.pink_solve is not None:
         s.pink_solve(targets[0])
     records = {who: _Record() for who in SOLVERS}
-    for i, target in enumerate(targets):
-        shift = i % len(SOLVERS)
+    blocks = range(0, len(targets), BLOCK)
+    for b, first in enumerate(blocks):
+        shift = b % len(SOLVERS)
         for who in SOLVERS[shift:] + SOLVERS[:shift]:
-            if who == "pink":
-                if s.pink_solve is not None:
-                    _time_pink(s, s.pink_solve, target, records[who])
-            else:
-                engine: Engine = "python" if who == "python" else "compiled"
-                _time_clik(s, target, i, records[who], engine)
-        if (i + 1) % max(1, len(targets) // 4) == 0:
-            log(f"  solve {i + 1}/{len(targets)}")
+            for i in range(first, min(first + BLOCK, len(targets))):
+                if who == "pink":
+                    if s.pink_solve is not None:
+                        _time_pink(s, s.pink_solve, targets[i], records[who])
+                else:
+                    engine: Engine = "python" if who == "python" else "compiled"
+                    _time_clik(s, targets[i], i, records[who], engine)
+        if (b + 1) % max(1, len(blocks) // 4) == 0:
+            log(f"  solve {min(first + BLOCK, len(targets))}/{len(targets)}")
     return records["compiled"], records["python"], records["pink"]
 
 

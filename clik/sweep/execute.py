@@ -77,10 +77,10 @@ THREADS_SECONDS = 2.0
 RAISED = "error"
 """The ``status`` of a run that raised (or whose task failed, e.g. ``KilledWorker``)."""
 
-FAILED_STATUSES = frozenset({"violated", "diverged"})
+FAILED_STATUSES = frozenset({"violated", "velocity_limit", "diverged"})
 """Run statuses that fail a sweep, as do runs that raised (:data:`RAISED`)."""
 
-STATUS_ORDER = ("completed", "deadlock", "diverged", "violated")
+STATUS_ORDER = ("completed", "deadlock", "diverged", "violated", "velocity_limit")
 """The order of the statuses in :func:`status_line` (others follow, sorted)."""
 
 

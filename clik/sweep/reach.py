@@ -14,8 +14,16 @@ of the task Jacobian ``J`` (``LOCAL_WORLD_ALIGNED``, the task's rows) at the
 solution: zero at a singularity, larger where the frame moves freely. For a
 position task ``w`` is in [m^m]; mixed units for a pose task.
 
+With a scenario (``ReachSpec.scenario``, ``clik reach --scenario``), the robot, its
+obstacles and its constraints come from the scenario file, and each point is solved
+with ``constraints=`` (:mod:`clik.constrained_solve`): a point whose unconstrained
+pose misses a constraint and that the constrained law cannot reach clear of them is
+*blocked*, a category of its own beside *unreachable*.
+
 Points are solved in chunks, as Dask tasks (the same local or remote cluster
-as :mod:`clik.sweep.execute`); a worker loads the robot once. The spec and the
+as :mod:`clik.sweep.execute`); a worker loads the robot once (with a scenario, the
+spec carries the file's contents, and each worker rebuilds the robot and the
+:class:`~clik.constraints.ConstraintSet` from them once). The spec and the
 map are in :mod:`clik.sweep.reach_data`; :func:`clik.sweep.reach_output.write_reach`
 writes a map's table, description and HTML view.
 """
@@ -30,14 +38,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clik.errors import InputError
+from clik.errors import InputError, RobotLoadError, ScenarioError
 from clik.sweep.execute import dask_client
 from clik.sweep.progress import RunProgress
-from clik.sweep.reach_data import COLUMNS, ReachMap, ReachSpec
+from clik.sweep.reach_data import BLOCKED, COLUMNS, ReachMap, ReachSpec
 
 if TYPE_CHECKING:
     from distributed import Client
 
+    from clik.constraints import ConstraintSet
     from clik.robot import Robot
     from clik.task import Task
 
@@ -50,6 +59,7 @@ __all__ = [
     "grid_points",
     "manipulability",
     "reach_map",
+    "reach_objects",
     "solve_points",
 ]
 
@@ -93,18 +103,48 @@ def manipulability(task: Task, q: np.ndarray) -> float:
 _local = threading.local()
 
 
-def _robot_and_task(spec: ReachSpec) -> tuple[Robot, Task]:
-    """The spec's robot and task, built once per worker thread."""
+def reach_objects(spec: ReachSpec) -> tuple[Robot, Task, ConstraintSet | None]:
+    """The spec's robot, task and constraints (None without any), built once per worker thread.
+
+    Raises:
+        RobotLoadError, FrameNotFound, JointNotFound, ScenarioError: from building them.
+    """
+    key = (
+        spec.robot, tuple(sorted(spec.lock.items())), spec.frame, spec.kind, spec.axes,
+        spec.scenario, repr(spec.scenario_data),
+    )  # fmt: skip
+    cached = getattr(_local, "reach", None)
+    if cached is None or cached[0] != key:
+        cached = _local.reach = (key, *_build(spec))
+    return cached[1], cached[2], cached[3]
+
+
+def _build(spec: ReachSpec) -> tuple[Robot, Task, ConstraintSet | None]:
+    """Load the robot, build the task and (with a scenario) its constraints."""
     from clik.robot import Robot
     from clik.task import Task
 
-    key = (spec.robot, tuple(sorted(spec.lock.items())), spec.frame, spec.kind, spec.axes)
-    cached = getattr(_local, "reach", None)
-    if cached is None or cached[0] != key:
+    axes = list(spec.axes) if spec.axes else None
+    if spec.scenario is None:
         robot = Robot.load(spec.robot, lock=spec.lock or None)
-        task = Task(robot, spec.frame, spec.kind, list(spec.axes) if spec.axes else None)
-        cached = _local.reach = (key, robot, task)
-    return cached[1], cached[2]
+        return robot, Task(robot, spec.frame, spec.kind, axes), None
+    from clik.constraints.build import build_constraints
+    from clik.scenario import parse_scenario
+
+    scenario = parse_scenario(spec.scenario_data or {}, spec.scenario)
+    source = scenario.robot
+    lock = {**source["lock"], **spec.lock}
+    try:
+        robot = Robot.load(
+            source["source"], package_dirs=source["package_dirs"] or None, lock=lock or None
+        )
+    except RobotLoadError as exc:
+        raise ScenarioError(scenario.file, "robot.source", str(exc)) from None
+    task = Task(robot, spec.frame, spec.kind, axes)
+    enabled = any(c.get("enabled") for c in scenario.constraints.values() if isinstance(c, dict))
+    if not (scenario.obstacles or enabled):
+        return robot, task, None
+    return robot, task, build_constraints(scenario, robot, task)
 
 
 def solve_points(spec: ReachSpec, points: np.ndarray) -> dict[str, list[Any]]:
@@ -113,9 +153,9 @@ def solve_points(spec: ReachSpec, points: np.ndarray) -> dict[str, list[Any]]:
 
     from clik.solve_mode import solve
 
-    robot, task = _robot_and_task(spec)
+    robot, task, constraints = reach_objects(spec)
     rotation = None if spec.orientation_rpy is None else pin.rpy.rpyToMatrix(*spec.orientation_rpy)
-    out: dict[str, list[Any]] = {c: [] for c in COLUMNS}
+    out: dict[str, list[Any]] = {c: [] for c in (*COLUMNS, BLOCKED)}
     for p in np.asarray(points, dtype=float).reshape(-1, 3):
         target = p if rotation is None else pin.SE3(rotation, p)
         result = solve(
@@ -126,6 +166,8 @@ def solve_points(spec: ReachSpec, points: np.ndarray) -> dict[str, list[Any]]:
             tolerance=spec.tolerance,
             orientation_tolerance=spec.orientation_tolerance,
             seed=spec.seed,
+            constraints=constraints,
+            tracking_attempts=spec.tracking_attempts,
         )
         for name, value in zip(("x", "y", "z"), p, strict=True):
             out[name].append(float(value))
@@ -135,6 +177,7 @@ def solve_points(spec: ReachSpec, points: np.ndarray) -> dict[str, list[Any]]:
         out["position_error"].append(float(result.position_error))
         out["orientation_error"].append(float(result.orientation_error))
         out["manipulability"].append(manipulability(task, result.q) if result.success else None)
+        out[BLOCKED].append(result.blocked)
     return out
 
 
@@ -142,9 +185,10 @@ def check_spec(spec: ReachSpec) -> np.ndarray:
     """Validate a spec here, before any task is sent; returns its grid points (N, 3).
 
     Raises:
-        InputError: A bad box, step or orientation.
-        RobotLoadError, UnknownRobotError, FrameNotFound, JointNotFound: from the
-            robot and the task.
+        InputError: A bad box, step, orientation or tracking_attempts, or moving
+            obstacles in the scenario.
+        RobotLoadError, UnknownRobotError, FrameNotFound, JointNotFound, ScenarioError:
+            from the robot, the task and the scenario's constraints.
     """
     points = grid_points(spec.box, spec.step)
     if not isinstance(spec.restarts, int) or isinstance(spec.restarts, bool) or spec.restarts < 0:
@@ -153,7 +197,13 @@ def check_spec(spec: ReachSpec) -> np.ndarray:
         rpy = np.asarray(spec.orientation_rpy, dtype=float)
         if rpy.shape != (3,) or not np.all(np.isfinite(rpy)):
             raise InputError("orientation", "roll, pitch, yaw: three finite angles", rpy.tolist())
-    _robot_and_task(spec)
+    attempts = spec.tracking_attempts
+    if not isinstance(attempts, int) or isinstance(attempts, bool) or attempts < 0:
+        raise InputError("tracking_attempts", "an integer >= 0", attempts)
+    _, _, constraints = reach_objects(spec)
+    moving = [] if constraints is None else [o.name for o in constraints.obstacles if o.moving]
+    if moving:
+        raise InputError("obstacles", "obstacles at rest in a reachability map", moving)
     return points
 
 
@@ -184,7 +234,7 @@ def reach_map(
                 parts = _solve_chunks(own, spec, chunks, bar)
     finally:
         bar.close()
-    columns = {c: [v for part in parts for v in part[c]] for c in COLUMNS}
+    columns = {c: [v for part in parts for v in part[c]] for c in (*COLUMNS, BLOCKED)}
     return ReachMap.from_columns(spec, columns, time.perf_counter() - start)
 
 

@@ -1,5 +1,9 @@
 """What a reachability map solves and what it found: :class:`ReachSpec`, :class:`ReachMap`.
 
+Each point is *reachable* (solved), *blocked* (solved without the constraints of the
+spec's scenario, not with them: :attr:`clik.SolveResult.blocked`) or *unreachable*
+(not solved even without constraints). Without a scenario no point is blocked.
+
 Plain data and its table (Parquet or CSV). The solving is in
 :mod:`clik.sweep.reach`, the 3-D view in :mod:`clik.sweep.reach_view`, and
 :func:`clik.sweep.reach_output.write_reach` writes a map's files.
@@ -31,6 +35,9 @@ COLUMNS = (
 )
 """Columns of the map's table (lengths [m], angles [rad])."""
 
+BLOCKED = "blocked"
+"""The table's last column with a scenario: the point is blocked by its constraints."""
+
 TABLE_FORMATS = ("auto", "parquet", "csv")
 """Values of ``fmt`` of :meth:`ReachMap.write_table`."""
 
@@ -52,6 +59,12 @@ class ReachSpec:
         tolerance: Position tolerance [m].
         orientation_tolerance: Orientation tolerance [rad].
         seed: Seed of the restarts (the same for every point).
+        scenario: The scenario file whose robot, obstacles and constraints the map
+            respects (absolute path), or None: the robot alone.
+        scenario_data: That file's contents as read (TOML); workers rebuild the robot and
+            the :class:`~clik.constraints.ConstraintSet` from it.
+        tracking_attempts: With a scenario, starts of the constrained law per point
+            (:func:`clik.solve`).
     """
 
     robot: str
@@ -65,6 +78,9 @@ class ReachSpec:
     tolerance: float = 1e-4
     orientation_tolerance: float = 1e-3
     seed: int = 0
+    scenario: str | None = None
+    scenario_data: dict[str, Any] | None = field(default=None, compare=False, repr=False)
+    tracking_attempts: int = 4
 
     @property
     def kind(self) -> Literal["position", "pose"]:
@@ -86,7 +102,14 @@ class ReachSpec:
             "tolerance": self.tolerance,
             "orientation_tolerance": self.orientation_tolerance,
             "seed": self.seed,
+            "scenario": self.scenario,
+            "tracking_attempts": self.tracking_attempts,
         }
+
+    @property
+    def table_columns(self) -> tuple[str, ...]:
+        """The table's columns: :data:`COLUMNS`, and :data:`BLOCKED` with a scenario."""
+        return COLUMNS if self.scenario is None else (*COLUMNS, BLOCKED)
 
 
 @dataclass
@@ -103,6 +126,8 @@ class ReachMap:
         orientation_error: Final orientation error [rad] (N,).
         manipulability: ``sqrt(det(J J^T))`` at the solution, NaN where not solved (N,).
         wall_time_s: Time to solve the map [s].
+        blocked: Not solved because of the scenario's constraints (N,) (all False
+            without a scenario; None: all False).
     """
 
     spec: ReachSpec
@@ -114,6 +139,11 @@ class ReachMap:
     orientation_error: np.ndarray
     manipulability: np.ndarray
     wall_time_s: float = 0.0
+    blocked: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.blocked is None:
+            self.blocked = np.zeros(len(self.success), dtype=bool)
 
     @classmethod
     def from_columns(
@@ -121,6 +151,7 @@ class ReachMap:
     ) -> ReachMap:
         """A map from the columns :func:`clik.sweep.reach.solve_points` returns (or a table)."""
         w = [math.nan if v is None else float(v) for v in columns["manipulability"]]
+        blocked = columns.get(BLOCKED)
         return cls(
             spec,
             np.column_stack([columns["x"], columns["y"], columns["z"]]).astype(float),
@@ -131,6 +162,7 @@ class ReachMap:
             np.asarray(columns["orientation_error"], dtype=float),
             np.asarray(w, dtype=float),
             wall_time_s,
+            None if blocked is None else np.asarray(blocked, dtype=bool),
         )
 
     @property
@@ -138,9 +170,19 @@ class ReachMap:
         """Share of the points solved."""
         return float(np.mean(self.success)) if len(self.success) else 0.0
 
+    def counts(self) -> dict[str, int]:
+        """Points per category: ``reachable``, ``blocked`` and ``unreachable``."""
+        blocked = np.zeros(0, dtype=bool) if self.blocked is None else self.blocked
+        reachable, n_blocked = int(self.success.sum()), int(blocked.sum())
+        return {
+            "reachable": reachable,
+            "blocked": n_blocked,
+            "unreachable": len(self.success) - reachable - n_blocked,
+        }
+
     def columns(self) -> dict[str, list[Any]]:
         """The table's columns (manipulability None where not solved)."""
-        return {
+        table = {
             "x": self.points[:, 0].tolist(),
             "y": self.points[:, 1].tolist(),
             "z": self.points[:, 2].tolist(),
@@ -151,6 +193,10 @@ class ReachMap:
             "orientation_error": self.orientation_error.tolist(),
             "manipulability": [None if math.isnan(v) else v for v in self.manipulability.tolist()],
         }
+        if self.spec.scenario is not None:
+            assert self.blocked is not None
+            table[BLOCKED] = self.blocked.tolist()
+        return table
 
     def write_table(self, path: str | os.PathLike[str], fmt: str = "auto") -> Path:
         """Write the map as Parquet or CSV, atomically; returns the path written.
@@ -188,6 +234,7 @@ class ReachMap:
         def text(v: Any) -> str:
             return "" if v is None else repr(v) if isinstance(v, float) else str(v)
 
-        lines = [",".join(COLUMNS)]
-        lines += [",".join(text(cols[c][i]) for c in COLUMNS) for i in range(len(self.points))]
+        names = list(cols)
+        lines = [",".join(names)]
+        lines += [",".join(text(cols[c][i]) for c in names) for i in range(len(self.points))]
         atomic_write(path, lambda f: f.write("\n".join(lines) + "\n"), mode="w")

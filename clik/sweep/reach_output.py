@@ -11,7 +11,8 @@ TABLE = "reach.parquet"
 """The map's table in the output folder (``reach.csv`` when written as CSV)."""
 
 INFO = "reach.json"
-"""The map's description: its spec, counts and time."""
+"""The map's description: its spec, counts (``reachable``, ``blocked``, ``unreachable``)
+and time."""
 
 HTML = "reach.html"
 """The map's self-contained 3-D view."""
@@ -27,7 +28,7 @@ def write_reach(reach: ReachMap, out: Path, html: bool = True) -> dict[str, Path
     info = {
         **reach.spec.as_dict(),
         "points": len(reach.points),
-        "reachable": int(reach.success.sum()),
+        **reach.counts(),
         "reachable_fraction": reach.reachable_fraction,
         "wall_time_s": reach.wall_time_s,
         "table": written["table"].name,

@@ -2,7 +2,8 @@
 
 Robots are loaded once per worker process (and thread), not once per run:
 :func:`cached_robot` keeps the last few robots, keyed by what
-:meth:`clik.Robot.load` is given (source, package folders, locked joints).
+:meth:`clik.Robot.load` is given (source, package folders, locked joints, xacro
+arguments).
 Each run then parses its own scenario (substituted base dict, cheap) and
 builds its task, trajectory and constraints on the cached robot.
 
@@ -62,6 +63,7 @@ def robot_key(spec: dict[str, Any]) -> tuple[Any, ...]:
         spec["source"],
         tuple(spec["package_dirs"]),
         tuple(sorted((k, float(v)) for k, v in spec["lock"].items())),
+        tuple(sorted(spec.get("xacro_args", {}).items())),
     )
 
 
@@ -78,7 +80,10 @@ def cached_robot(spec: dict[str, Any]) -> Robot:
     robot = cache.get(key)
     if robot is None:
         robot = Robot.load(
-            spec["source"], package_dirs=spec["package_dirs"] or None, lock=spec["lock"] or None
+            spec["source"],
+            package_dirs=spec["package_dirs"] or None,
+            lock=spec["lock"] or None,
+            xacro_args=spec.get("xacro_args") or None,
         )
         cache[key] = robot
         with _count_lock:

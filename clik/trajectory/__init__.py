@@ -34,6 +34,7 @@ from clik.trajectory.line import Line
 from clik.trajectory.pose import PoseTrajectory
 from clik.trajectory.profile import TrapezoidalProfile, trapezoidal_profile
 from clik.trajectory.reference import Reference
+from clik.trajectory.retimed import Retimed
 from clik.trajectory.slerp import Slerp
 from clik.trajectory.waypoints import Waypoints
 
@@ -44,6 +45,7 @@ __all__ = [
     "Line",
     "PoseTrajectory",
     "Reference",
+    "Retimed",
     "Slerp",
     "Trajectory",
     "TrapezoidalProfile",
