@@ -4,6 +4,8 @@
 // written each sample by the run's ConstraintRun. The run owns it.
 #pragma once
 
+#include <stdexcept>
+
 #include "types.hpp"
 
 namespace clik {
@@ -20,6 +22,7 @@ struct ExtendedTask {
   ExtendedTask(int m_, int rows_, int nv_, const Vec& K_task)
       : m(m_), rows(rows_), nv(nv_), J(Mat::Zero(rows_, nv_)), e(Vec::Zero(rows_)),
         K(Vec::Zero(rows_)), ff(Vec::Zero(rows_)) {
+    if (m_ < 1 || m_ > MAX_TASK_ROWS) throw std::invalid_argument("task: expected 1 to 6 rows");
     K.head(m) = K_task;
   }
 

@@ -3,7 +3,6 @@
 // construction: velocity() allocates nothing.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <vector>
@@ -42,15 +41,19 @@ class Law {
 
  private:
   double prioritized(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot);
-  void damped_solve(const Eigen::MatrixXd& A, const Vec& b, double epsilon, Vec& y);
+  void constraint_level(const ExtendedTask& ext, int v, double epsilon);
+  void one_constraint_level(const ExtendedTask& ext, double epsilon);
+  void damped_solve(const TaskMat& A, const Vec& b, double epsilon, Vec& y);
   void within_budget(Vec& qdot) const;
 
   LawSettings s_;
+  double scale_ = 0.0;  // sqrt of the largest squared row norm of the task's J
   Vec b_, work_, jte_, qdot_c_, qdot_t_, rest_, y_, w_, gain_, tmp_;
-  Eigen::MatrixXd JN_, A_, M_;
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig_;
-  Eigen::LLT<Eigen::MatrixXd> llt_;
-  // constraint_[v - 1]: the v active constraint rows C and their SVD.
+  Eigen::MatrixXd JN_;
+  TaskMat A_;  // m x m, m <= MAX_TASK_ROWS
+  Eigen::SelfAdjointEigenSolver<TaskMat> eig_;
+  // constraint_[v - 1]: the v active constraint rows C and their SVD (v >= 2; one
+  // row has a closed form).
   struct ConstraintBlock {
     ConstraintBlock(int v, int nv);
     Eigen::MatrixXd C;

@@ -12,6 +12,13 @@ using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajo
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 
+// A task has at most six rows (x, y, z, rx, ry, rz): its square matrices live on the
+// stack (fixed capacity, run-time size), faster than heap matrices at this size.
+constexpr int MAX_TASK_ROWS = 6;
+using TaskMat =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, MAX_TASK_ROWS, MAX_TASK_ROWS>;
+using TaskVec = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, MAX_TASK_ROWS, 1>;
+
 // The law, as clik/laws.py names it.
 enum class LawKind { transpose, nonlinear, pseudoinverse };
 

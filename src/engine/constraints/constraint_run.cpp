@@ -89,7 +89,7 @@ ConstraintRun::ConstraintRun(const ConstraintConfig& config, const pinocchio::Mo
   q_prev_ = Vec::Zero(model.nq);
   dq_ = Vec::Zero(nv);
   joint_e_ = Vec::Zero(n_joint_rows_);
-  lb_ = Mat::Constant(n_links_, n_obs_, -INF);
+  lb_ = Eigen::MatrixXd::Constant(n_links_, n_obs_, -INF);
   evaluated_.assign(static_cast<size_t>(n_links_) * n_obs_, 0);
   rho_dq_ = Vec::Zero(n_links_);
   thr_o_ = Vec::Zero(n_obs_);
@@ -287,32 +287,34 @@ void ConstraintRun::evaluate_obstacles(double tk, pinocchio::Data& data, bool ex
     if (c.kind == ConstraintKind::obstacle) todo_.emplace_back(c.link, c.obstacle);
   }
   Candidate c;
-  while (true) {  // evaluate, then the nearest pair of each obstacle, until settled
-    for (const auto& [i, o] : todo_) {
-      char& done = evaluated_[static_cast<size_t>(i) * n_obs_ + o];
-      if (done) continue;
-      place(tk, data);
-      obstacle_candidate(i, o, c);
-      lb_(i, o) = c.distance;
-      done = 1;
-      if (cfg_.obstacle_rows && (c.distance < c.threshold || is_active_[c.key])) {
-        cand_.push_back(c);
-      }
+  for (const auto& [i, o] : todo_) {  // the pairs near their threshold, and the active
+    char& done = evaluated_[static_cast<size_t>(i) * n_obs_ + o];
+    if (done) continue;
+    place(tk, data);
+    obstacle_candidate(i, o, c);
+    lb_(i, o) = c.distance;
+    done = 1;
+    if (cfg_.obstacle_rows && (c.distance < c.threshold || is_active_[c.key])) {
+      cand_.push_back(c);
     }
-    todo_.clear();
-    for (int o = 0; o < n_obs_; ++o) {  // argmin over the links: the first smallest
-      int best = 0;
-      for (int i = 1; i < n_links_; ++i) {
-        if (lb_(i, o) < lb_(best, o)) best = i;
-      }
-      link_o[o] = best;
-      dist_o[o] = lb_(best, o);
-      const double margin = exact ? INF : margin_o_[o];
-      const bool known = evaluated_[static_cast<size_t>(best) * n_obs_ + o];
+  }
+  // Then each obstacle's nearest link (the first smallest bound, as np.argmin), until
+  // it is exact or beyond the margin. A pair evaluated here is at or beyond its
+  // threshold (its bound was), so it is never a candidate.
+  for (int o = 0; o < n_obs_; ++o) {
+    const double margin = exact ? INF : margin_o_[o];
+    while (true) {
+      Eigen::Index best;
+      dist_o[o] = lb_.col(o).minCoeff(&best);
+      link_o[o] = static_cast<int>(best);
+      char& known = evaluated_[static_cast<size_t>(best) * n_obs_ + o];
       exact_o[o] = known;
-      if (dist_o[o] < margin && !known) todo_.emplace_back(best, o);
+      if (known || !(dist_o[o] < margin)) break;
+      place(tk, data);
+      obstacle_candidate(static_cast<int>(best), o, c);
+      lb_(best, o) = c.distance;
+      known = 1;
     }
-    if (todo_.empty()) break;
   }
   double nearest = INF;
   for (int o = 0; o < n_obs_; ++o) {

@@ -187,7 +187,8 @@ class ConstraintRun {
   bool has_prev_ = false, dq_valid_ = false;
   Vec joint_e_;
   double joint_slack_ = -1.0;  // unknown: evaluate at the first sample
-  Mat lb_;                     // (n_links, n_obs) distance lower bounds, -inf at the start
+  Eigen::MatrixXd lb_;         // (n_links, n_obs) distance lower bounds, -inf at the start
+                               // (column-major: an obstacle's column is contiguous)
   std::vector<char> evaluated_;  // (n_links * n_obs), row-major
   Vec rho_dq_, obs_step_, thr_o_, margin_o_;
   bool has_obs_step_ = false;
