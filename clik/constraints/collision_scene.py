@@ -95,6 +95,8 @@ class CollisionScene:
             # much between samples; rows are derivatives, so ask for 1e-9 m.
             request.gjk_tolerance = GJK_TOLERANCE
             request.epa_tolerance = GJK_TOLERANCE
+            # Warm start: GJK begins where the pair's last query ended (samples are close).
+            request.gjk_initial_guess = coal.GJKInitialGuess.CachedGuess
         self._joint_pos = np.zeros((len(self.joints), 3))
 
     def _add_links(self, gmodel: pin.GeometryModel, links: Sequence[str] | None) -> None:
@@ -267,6 +269,7 @@ class CollisionScene:
     def distance(self, pair: int) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
         """Signed distance of a pair, its witness points (first on the link) and the normal."""
         res = pin.computeDistance(self.gmodel, self.gdata, pair)
+        self.gdata.distanceRequests[pair].updateGuess(res)
         return res.min_distance, res.getNearestPoint1(), res.getNearestPoint2(), res.normal
 
 
