@@ -67,6 +67,14 @@ def print_summary(name: str, summary: dict) -> None:
     )
     if summary.get("min_obstacle_distance") is not None:
         print(f"  min link-obstacle distance {summary['min_obstacle_distance']:.4f} m")
+    ratio = summary.get("max_velocity_ratio")
+    if ratio is not None:
+        over = ", ".join(
+            f"{v['joint']} x{v['max_ratio']:.2f} from t = {v['t_first']:.3f} s"
+            for v in summary.get("velocity", [])
+        )
+        line = f"  joint speed: max |qdot| / URDF limit {ratio:.2f}"
+        print(line + (f" (over the limit: {over})" if over else ""))
     if summary["events"]:
         print(
             "  events: "

@@ -18,7 +18,8 @@ class BenchConfig:
         case_study_rounds: Repeats of the eight case-study runs.
         memory_samples: Samples of the planar run whose peak RSS is measured.
         memory_record_every: Decimation of the memory run's decimated variant.
-        sweep_runs: Runs of the timed sweep.
+        sweep_runs: Runs of the timed sweep (enough that the sweep's fixed costs, submission
+            and the final write, weigh little against the steady rate).
         sweep_repeats: Alternations of the 1- and 2-worker sweeps (median taken).
         seed: Seed of the random solve targets.
         zoo_robots: Robots of the zoo line (None: every robot ``clik.Robot.available()``
@@ -33,7 +34,7 @@ class BenchConfig:
     case_study_rounds: int = 5
     memory_samples: int = 1_000_000
     memory_record_every: int = 1000
-    sweep_runs: int = 120
+    sweep_runs: int = 360
     sweep_repeats: int = 3
     seed: int = 6
     zoo_robots: tuple[str, ...] | None = None
