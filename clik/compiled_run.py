@@ -185,4 +185,6 @@ class CompiledConstraints:
                 extra[name] = dict(rec[name])
         if cset.joint_limits is not None:
             extra["joint_limits_used"] = cset.joint_limits_used()
+        if cset.dexterity is not None:
+            extra["dexterity_used"] = cset.dexterity_used()
         result.info["summary_extra"] = extra

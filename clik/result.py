@@ -19,6 +19,7 @@ import numpy as np
 from clik.errors import InputError
 from clik.export import FORMATS, check_every, check_formats, joint_trajectory, write_trajectory
 from clik.io import atomic_write, write_json
+from clik.manipulability import manipulability_record, min_manipulability
 from clik.velocity_report import VelocityLimits, model_velocity_limits, velocity_report
 
 if TYPE_CHECKING:
@@ -86,6 +87,9 @@ class TrackingResult:
             :mod:`clik.violations`.
         min_obstacle_distance: Minimum link-obstacle distance per sample (N,) [m], or None.
         info: Free-form metadata (robot, frame, law, gain, dt, ...), JSON-serialisable.
+        extra: Further per-sample arrays: constraint records (``active``, ``witness``,
+            ...) and ``manipulability``, the task's ``w`` (D1) at each recorded sample
+            [m^p] (:mod:`clik.manipulability`; filled by :meth:`summary` when missing).
         velocity_limits: The robot's joint velocity limits per velocity coordinate
             (``model.velocityLimit``) [rad/s or m/s], taken from ``robot`` when not given;
             saved with the result so a loaded result reports the same joint speeds.
@@ -146,6 +150,7 @@ class TrackingResult:
         )
         summary["max_velocity_ratio"] = speeds.max_velocity_ratio
         summary["velocity"] = speeds.records
+        summary["min_manipulability"] = min_manipulability(self)
         summary.update(self.info.get("summary_extra", {}))
         summary["info"] = {k: v for k, v in self.info.items() if k != "summary_extra"}
         return summary
@@ -187,6 +192,7 @@ class TrackingResult:
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the result to a ``.npz`` file (atomically: a temporary file, then a rename)."""
         path = Path(path)
+        manipulability_record(self)  # kept in extra: a loaded result reports it without a robot
         arrays = {name: getattr(self, name) for name in _ARRAYS if getattr(self, name) is not None}
         arrays.update({f"extra_{k}": v for k, v in self.extra.items()})
         arrays["joint_min"] = self.joint_min

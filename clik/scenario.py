@@ -333,11 +333,33 @@ def _constraints(ct: Table) -> dict[str, Any]:
         "gain": sc.number("gain", None, minimum=0.0, strict=True, unit="[1/s]"),
     }
     sc.done()
+    out["dexterity"] = _dexterity(ct.table("dexterity"))
     out["velocity_limits"] = _velocity_limits(ct.table("velocity_limits"))
     out["release"] = ct.string("release", "projection", ("projection", "sign"))
     out["hysteresis"] = ct.number("hysteresis", 0.0, minimum=0.0)
     out["max_active"] = ct.number("max_active", None, minimum=0, integer=True)
     ct.done()
+    return out
+
+
+def _dexterity(dx: Table) -> dict[str, Any]:
+    """``[constraints.dexterity]``: keep the task's manipulability ``w >= threshold`` (D1)-(D3).
+
+    Keys: ``enabled`` (default false), ``threshold`` (``w_min`` > 0 [m^p], required when
+    enabled), ``gain`` (> 0 [1/s], default: the law's).
+    """
+    enabled = dx.boolean("enabled", False)
+    unit = "[m^p] (the task's manipulability)"
+    if enabled:
+        threshold = dx.number("threshold", minimum=0.0, strict=True, unit=unit)
+    else:
+        threshold = dx.number("threshold", None, minimum=0.0, strict=True, unit=unit)
+    out = {
+        "enabled": enabled,
+        "threshold": None if threshold is None else float(threshold),
+        "gain": dx.number("gain", None, minimum=0.0, strict=True, unit="[1/s]"),
+    }
+    dx.done()
     return out
 
 

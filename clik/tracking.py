@@ -284,7 +284,9 @@ class _Run:
         self.crun: ConstraintRun | None = (
             None
             if cset is None
-            else ConstraintRun(cset, m, tracker.law, tracker.alpha, t, self.rec.capacity)
+            else ConstraintRun(
+                cset, m, tracker.law, tracker.alpha, t, self.rec.capacity, task.frame_id, task.rows
+            )
         )
         self.monitor = ViolationMonitor(_joint_range(robot, cset))
         self.checks = StopChecks(settings, tracker.law, self.dt)

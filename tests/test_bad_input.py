@@ -61,7 +61,7 @@ from clik import (
     track,
 )
 from clik.cli import main
-from clik.constraints import ConstraintSet, JointLimits, Obstacle
+from clik.constraints import ConstraintSet, Dexterity, JointLimits, Obstacle
 from clik.robot import Robot
 from clik.runner import build, run_scenario
 from clik.scenarios import scenario_path
@@ -249,6 +249,12 @@ def driven_back(result: clik.TrackingResult) -> None:
 def velocity_section(env: Env, body: str) -> Path:
     """The case study with a ``[constraints.velocity_limits]`` table holding ``body``."""
     section = f"[constraints.velocity_limits]\n{body}\n\n[constraints.obstacles]"
+    return env.scenario("[constraints.obstacles]", section)
+
+
+def dexterity_section(env: Env, body: str) -> Path:
+    """The case study with a ``[constraints.dexterity]`` table holding ``body``."""
+    section = f"[constraints.dexterity]\n{body}\n\n[constraints.obstacles]"
     return env.scenario("[constraints.obstacles]", section)
 
 
@@ -741,6 +747,55 @@ SCENARIO = [
             ["constraints.velocity_limits.enabled", "has none", "nothing to respect"],
         ),
         id="scenario-velocity-limits-robot-without-limits",
+    ),
+    pytest.param(
+        lambda env: build(dexterity_section(env, "enabled = true\nthreshold = 0.0")),
+        Raises(
+            ScenarioError,
+            ["constraints.dexterity.threshold: expected a number > 0 [m^p]", "got 0.0"],
+        ),
+        id="scenario-dexterity-threshold-zero",
+    ),
+    pytest.param(
+        lambda env: build(dexterity_section(env, "enabled = true\nthreshold = -0.1")),
+        Raises(ScenarioError, ["constraints.dexterity.threshold: expected a number > 0", "-0.1"]),
+        id="scenario-dexterity-threshold-negative",
+    ),
+    pytest.param(
+        lambda env: build(dexterity_section(env, 'enabled = true\nthreshold = "high"')),
+        Raises(ScenarioError, ["constraints.dexterity.threshold: expected a number > 0", "'high'"]),
+        id="scenario-dexterity-threshold-not-a-number",
+    ),
+    pytest.param(
+        lambda env: build(dexterity_section(env, "enabled = true")),
+        Raises(ScenarioError, ["constraints.dexterity.threshold: required key is missing"]),
+        id="scenario-dexterity-threshold-missing",
+    ),
+    pytest.param(
+        lambda env: build(dexterity_section(env, "enabled = true\nthreshold = 0.1\nmargin = 1")),
+        Raises(
+            ScenarioError,
+            [
+                "constraints.dexterity.margin: unknown key; valid keys here: enabled, gain, "
+                "threshold"
+            ],
+        ),
+        id="scenario-dexterity-unknown-key",
+    ),
+    pytest.param(
+        lambda env: build(dexterity_section(env, "enabled = true\nthreshold = 0.1\ngain = 0")),
+        Raises(ScenarioError, ["constraints.dexterity.gain: expected a number > 0 [1/s]"]),
+        id="scenario-dexterity-gain-zero",
+    ),
+    pytest.param(
+        lambda env: ConstraintSet(env.robot, dexterity=Dexterity(-1.0)),
+        Raises(InputError, ["constraints.dexterity.threshold: expected a positive"]),
+        id="api-dexterity-threshold-negative",
+    ),
+    pytest.param(
+        lambda env: ConstraintSet(env.robot, dexterity=0.1),
+        Raises(InputError, ["constraints.dexterity: expected a Dexterity(threshold=...)"]),
+        id="api-dexterity-not-a-dexterity",
     ),
 ]
 

@@ -17,11 +17,11 @@ import pytest
 import clik
 import clik.tracking as tracking
 from clik.bench.step_lines import OBSTACLES_ONE_ACTIVE, PANDA_TRANSPOSE_GAIN
-from clik.constraints import ConstraintSet, JointLimits, Obstacle
+from clik.constraints import ConstraintSet, Dexterity, JointLimits, Obstacle
 from clik.constraints.constraint_run import ConstraintRun
 from clik.runner import build
 from clik.scenarios import scenario_path
-from clik.trajectory import Line
+from clik.trajectory import Hold, Line, PoseTrajectory, Waypoints
 
 engine = pytest.importorskip("clik._engine")
 
@@ -41,6 +41,7 @@ class _Logged(ConstraintRun):
             for k in (
                 "q", "JT", "E", "FF", "exact", "slot", "v", "J", "e", "K", "ff",
                 "min_distance", "dist_o", "link_o", "exact_o", "active", "penetrations",
+                "manipulability",
             )
         }  # fmt: skip
 
@@ -62,6 +63,7 @@ class _Logged(ConstraintRun):
         log["exact_o"].append(np.array(self.exact_o, dtype=bool))
         log["active"].append(self.active_names())
         log["penetrations"].append(list(self.self_penetrations))
+        log["manipulability"].append(self.manipulability)
         return v
 
     def record(self, j):
@@ -102,6 +104,8 @@ def engine_run(tracker, crun):
         np.array(log["FF"]).reshape(n, m),
         log["exact"],
         log["slot"],
+        crun.frame_id,
+        [int(r) for r in crun.task_rows],
     )
 
 
@@ -125,6 +129,7 @@ def assert_same(result, crun, out):
         assert [p[0] for p in pen] == [p[0] for p in log["penetrations"][k]], f"sample {k}"
         close([p[1] for p in pen], [p[1] for p in log["penetrations"][k]], f"sample {k}")
     close(out["min_distance"], log["min_distance"], "min_distance")
+    close(out["manipulability"], log["manipulability"], "manipulability")  # NaN: no row
     if crun.cset.obstacles:
         close(out["dist_o"], np.array(log["dist_o"]), "dist_o")
         np.testing.assert_array_equal(out["link_o"], np.array(log["link_o"]))
@@ -348,6 +353,48 @@ def test_panda_self_collision_monitor(monkeypatch, panda):
     result, crun = check(monkeypatch, tracker, fold, record_every=5)
     assert any(crun.log["penetrations"])  # the fingers go into the arm
     assert "skipped" in actions(result.events, "self:")
+
+
+# -- the dexterity row -----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("record_every", [1, 5])
+def test_dexterity_scenario(monkeypatch, record_every):
+    """The case-study arm stretched past its reach, law (9) (case_study_dexterity)."""
+    run = scenario_case("case_study_dexterity")
+    with pytest.warns(tracking.ReachWarning):
+        result, crun = check(monkeypatch, run.tracker, run.trajectory, run.q0, record_every)
+    assert actions(result.events, "dexterity") == ["activate", "release"]
+    assert np.isfinite(crun.log["manipulability"]).all()
+
+
+@pytest.mark.parametrize("release", ["projection", "sign"])
+def test_dexterity_pseudoinverse_with_joint_ranges(monkeypatch, planar4r, release):
+    """Law (10), the tip out near the edge of the reach and back; the row and joint ranges."""
+    task = clik.Task(planar4r, "tip", "position", axes=["x", "y"])
+    q0 = np.radians([180.0, -30.0, -90.0, -30.0])
+    p0 = task.placement(q0).translation
+    turn = [1.195 * np.cos(np.radians(-10.0)), 1.195 * np.sin(np.radians(-10.0)), 0.0]
+    trajectory = Waypoints([p0, turn, p0], cruise_speed=0.2, accel_time=0.3)
+    cset = ConstraintSet(
+        planar4r, dexterity=Dexterity(0.08), joint_limits=JointLimits(planar4r), release=release
+    )
+    tracker = clik.Tracker(task, law="pseudoinverse", constraints=cset)
+    result, _ = check(monkeypatch, tracker, trajectory, q0, record_every=3)
+    assert "activate" in actions(result.events, "dexterity")
+
+
+def test_dexterity_panda_pose(monkeypatch, panda):
+    """The Panda's pose task near the singularity of joints 1 and 3 aligned (q2 = 0)."""
+    task = clik.Task(panda, "panda_hand", "pose")
+    q0 = np.array([-0.02, -0.18, 0.97, -1.13, -0.51, 2.78, -1.31])
+    M = task.placement(q0)
+    line = Line(M.translation, M.translation + [0.1, 0.165, -0.165], 2.0)
+    trajectory = PoseTrajectory(line, Hold(rotation=M.rotation, duration=2.0))
+    cset = ConstraintSet(panda, dexterity=Dexterity(0.012), dexterity_gain=500.0)
+    tracker = clik.Tracker(task, law="pseudoinverse", constraints=cset)
+    result, _ = check(monkeypatch, tracker, trajectory, q0, record_every=4)
+    assert "activate" in actions(result.events, "dexterity")
 
 
 # -- set-up pieces ---------------------------------------------------------------------

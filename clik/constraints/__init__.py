@@ -8,6 +8,8 @@ Jacobian row ``j_c`` and a feed-forward term ``f_c`` such that
 
 - :class:`Obstacle`: convex obstacles (sphere, box, capsule, cylinder, mesh hull).
 - :class:`JointLimits`: joint-range rows, eqs. (16)-(19).
+- :class:`Dexterity`: the dexterity row, ``w(q) >= w_min`` on the task's
+  manipulability (D1)-(D3) (clik's addition; the paper's future work).
 - :func:`obstacle_row`: obstacle rows, eqs. (13)-(15), in the paper's squared form
   or the normalised one.
 - :class:`CollisionScene`: link geometry (convex) and obstacles, with pruning.
@@ -20,6 +22,7 @@ from clik.constraints.collision_scene import (
     SkippedGeometryWarning,
 )
 from clik.constraints.constraint_set import RELEASE_RULES, ConstraintSet
+from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits
 from clik.constraints.obstacle import SHAPES, Obstacle
 from clik.constraints.obstacle_rows import FORMS, obstacle_row, point_jacobian
@@ -30,6 +33,7 @@ __all__ = [
     "SHAPES",
     "CollisionScene",
     "ConstraintSet",
+    "Dexterity",
     "JointLimits",
     "NoCollisionGeometryWarning",
     "Obstacle",

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from clik.constraints.constraint_set import ConstraintSet
+from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits, convert_override
 from clik.constraints.obstacle import Obstacle
 from clik.errors import ClikError, GeometryError, InputError, JointNotFound, ScenarioError
@@ -22,6 +23,8 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
     joints' ``d_q`` and ``prismatic_threshold`` [m] the prismatic joints' (each
     capped at a quarter of the joint's range); an override is read in the
     table's ``unit`` for a revolute joint and in metres for a prismatic one.
+    The dexterity row (:class:`Dexterity`) keeps the task's manipulability above
+    ``[constraints.dexterity] threshold``.
     """
     obstacles = []
     for i, spec in enumerate(scenario.obstacles):
@@ -64,6 +67,7 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
             raise ScenarioError(scenario.file, exc.field, str(exc)) from None
         if not jl_spec["enabled"]:
             joint_limits = None
+    dx_spec = c.get("dexterity") or {"enabled": False, "gain": None}
     release = obs["release"] or c["release"]
     try:
         return ConstraintSet(
@@ -79,9 +83,21 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
             self_collision=sc["enabled"],
             self_threshold=sc["threshold"],
             self_gain=sc["gain"],
+            dexterity=_dexterity(scenario, dx_spec),
+            dexterity_gain=dx_spec["gain"],
             release=release,
             hysteresis=c["hysteresis"],
             max_active=c["max_active"],
         )
     except ClikError as exc:
         raise ScenarioError(scenario.file, "constraints", str(exc)) from None
+
+
+def _dexterity(scenario: Scenario, spec: dict[str, Any]) -> Dexterity | None:
+    """The ``[constraints.dexterity]`` row (:class:`Dexterity`), or None when not enabled."""
+    if not spec["enabled"]:
+        return None
+    try:
+        return Dexterity(spec["threshold"])
+    except InputError as exc:
+        raise ScenarioError(scenario.file, exc.field, str(exc)) from None

@@ -7,7 +7,9 @@ shared by several trackers (or runs) never mixes their state. Per sample
 
 1. every monitored constraint's error is evaluated (joint ranges for all
    joints at once; link-obstacle pairs through distance certificates and
-   link-link pairs after a bounding-sphere prune, with coal's witness points);
+   link-link pairs after a bounding-sphere prune, with coal's witness points;
+   the task's manipulability (D1) from the task rows, its gradient (D3) only
+   while the dexterity row is active);
 2. **activation**: a constraint whose threshold is violated (error > 0) is
    activated, the most violated first, up to the bound on active rows (22);
    the others are recorded as ``skipped``;
@@ -32,7 +34,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from clik.constraints.dexterity import DEXTERITY_KEY, dexterity_row
 from clik.constraints.obstacle_rows import obstacle_error, obstacle_row, point_jacobian
+from clik.errors import InputError
 from clik.extended_task import ExtendedTask
 
 if TYPE_CHECKING:
@@ -51,11 +55,11 @@ class Candidate:
 
     Attributes:
         key: Constraint name (``joint:<joint>:lower``, ``obstacle:<obstacle>:<link>``,
-            ``self:<link a>:<link b>``).
-        kind: ``"joint"``, ``"obstacle"`` or ``"self"``.
-        error: Its error (positive inside the threshold) [m, rad or m^2].
-        scale: Its threshold in the error's unit (``d_o``, ``d_q``, or ``d_o^2 / 2``).
-        threshold: The threshold distance ``d_o`` or ``d_q`` [m or rad].
+            ``self:<link a>:<link b>``, ``dexterity``).
+        kind: ``"joint"``, ``"obstacle"``, ``"self"`` or ``"dexterity"``.
+        error: Its error (positive inside the threshold) [m, rad, m^2 or m^p].
+        scale: Its threshold in the error's unit (``d_o``, ``d_q``, ``d_o^2 / 2`` or ``w_min``).
+        threshold: The threshold ``d_o``, ``d_q`` [m or rad] or ``w_min`` [m^p].
         feed: Feed-forward term of its row (14).
         index: Joint-range row index (joint rows).
         joint, joint_b: Parent joints of the witness points (obstacle and self rows).
@@ -107,11 +111,30 @@ class ConstraintRun:
         alpha: The task's largest gain [1/s].
         t: The run's time grid [s].
         n_rec: Number of recorded samples.
+        frame_id: The task's frame (the dexterity row's Jacobian derivative).
+        task_rows: The task's rows among ``(x, y, z, rx, ry, rz)`` (idem).
+
+    Raises:
+        InputError: A dexterity row without the task's frame.
     """
 
     def __init__(
-        self, cset: ConstraintSet, m: int, law: str, alpha: float, t: np.ndarray, n_rec: int
+        self,
+        cset: ConstraintSet,
+        m: int,
+        law: str,
+        alpha: float,
+        t: np.ndarray,
+        n_rec: int,
+        frame_id: int = -1,
+        task_rows: np.ndarray | None = None,
     ) -> None:
+        if cset.dexterity is not None and (frame_id < 0 or task_rows is None):
+            raise InputError("constraints.dexterity", "the task's frame and rows for the row")
+        self.frame_id = frame_id
+        self.task_rows = np.arange(m) if task_rows is None else np.asarray(task_rows, np.intp)
+        self.manipulability = math.nan
+        """This sample's ``w`` (D1) [m^p] (NaN without a dexterity row)."""
         self.cset = cset
         self.robot = cset.robot
         self.scene = cset.scene
@@ -174,6 +197,8 @@ class ConstraintRun:
         """
         tk = float(self.t[k])
         candidates = self._evaluate(tk, q, exact)
+        if self.cset.dexterity is not None:
+            self._evaluate_dexterity(ext.J[: self.m], candidates)
         self._q_prev = q  # the tracker makes a new array per step (pin.integrate)
         self._refresh_active(tk, candidates)
         self._activate(tk, candidates)
@@ -355,11 +380,24 @@ class ConstraintRun:
                 c.distance, c.point_a, c.point_b, c.normal = dist, pa, pb, normal
                 out.append(c)
 
+    def _evaluate_dexterity(self, J: np.ndarray, out: list[Candidate]) -> None:
+        """The dexterity error (D2) of the task rows ``J``: a candidate when positive or active.
+
+        Only ``w`` (D1) is evaluated here (a Cholesky factor of the m x m ``J J^T``); the
+        row's gradient (D3), which needs the kinematic Hessian, only while it is active.
+        """
+        dex = self.cset.dexterity
+        assert dex is not None
+        error, self.manipulability = dex.error(J)
+        if error > 0.0 or any(c.key == DEXTERITY_KEY for c in self.active):
+            thr = dex.threshold
+            out.append(Candidate(DEXTERITY_KEY, "dexterity", error, thr, thr))
+
     # -- rows --------------------------------------------------------------------------
 
     def _gain(self, kind: str, row_norm2: float) -> float:
         """A row's gain: the user's, else ``alpha`` (law (10)) or ``alpha / (2 max(1, |j|^2))``."""
-        given = self.cset.gains[kind]
+        given = self.cset.gains.get(kind)
         if given is not None:
             return given
         if self.law == "pseudoinverse":
@@ -367,13 +405,16 @@ class ConstraintRun:
         return 0.5 * self.alpha / max(1.0, row_norm2)
 
     def _fill_rows(self, ext: ExtendedTask) -> int:
-        """Write the active constraints' rows (15), (19) into the extended task (24)-(25)."""
+        """Write the active constraints' rows (15), (19), (D3) into the extended task (24)-(25)."""
         model, data = self.robot.model, self.robot.data
         cset, m = self.cset, self.m
         for s, c in enumerate(self.active):
             row = ext.J[m + s]
             if c.kind == "joint":
                 cset.joint_limits.row(c.index, row)  # type: ignore[union-attr]
+                c.feed = 0.0
+            elif c.kind == "dexterity":
+                dexterity_row(model, data, self.frame_id, self.task_rows, ext.J[:m], row)
                 c.feed = 0.0
             else:  # obstacle (13)-(15), or a link pair: the second link in the obstacle's place
                 Jp = point_jacobian(model, data, c.joint, c.point_a)
@@ -422,7 +463,7 @@ class ConstraintRun:
         for s, c in enumerate(self.active):
             code = self.codes.setdefault(c.key, len(self.codes))
             self.rec_active[j, s] = code
-            if c.kind != "joint":
+            if c.kind in ("obstacle", "self"):
                 self.rec_witness[j, s, 0] = c.point_a
                 self.rec_witness[j, s, 1] = c.point_b
 
@@ -471,4 +512,6 @@ class ConstraintRun:
             }
         if cset.joint_limits is not None:
             extra["joint_limits_used"] = cset.joint_limits_used()
+        if cset.dexterity is not None:
+            extra["dexterity_used"] = cset.dexterity_used()
         result.info["summary_extra"] = extra

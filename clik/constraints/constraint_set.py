@@ -1,4 +1,4 @@
-r"""A run's constraints: obstacles, joint ranges, link pairs, and how their rows behave.
+r"""A run's constraints: obstacles, joint ranges, link pairs, dexterity, and how their rows behave.
 
 The augmented task (docs/method.md, eqs. (20)-(25)) stacks the task rows and
 the *active* constraint rows: ``J_e = (J; J_o; U)`` (24), ``e_e = (e; e_o; e_q)``
@@ -20,6 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from clik.constraints.collision_scene import CollisionScene
+from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits
 from clik.constraints.obstacle import Obstacle
 from clik.constraints.obstacle_rows import FORMS
@@ -32,7 +33,7 @@ RELEASE_RULES = ("projection", "sign")
 
 
 class ConstraintSet:
-    """Obstacle, joint-range and self-collision constraints of one run.
+    """Obstacle, joint-range, self-collision and dexterity constraints of one run.
 
     Args:
         robot: The robot.
@@ -47,6 +48,9 @@ class ConstraintSet:
         self_collision: Link-link rows.
         self_threshold: Threshold of link-link pairs [m].
         self_gain: Gain of link-link rows [1/s]; None: default of the law.
+        dexterity: The dexterity row (:class:`Dexterity`, ``w >= w_min`` on the task's
+            manipulability, (D1)-(D3)), or None.
+        dexterity_gain: Gain of the dexterity row [1/s]; None: default of the law.
         release: ``"projection"`` (default) or ``"sign"``.
         hysteresis: With the sign rule, release only when the error is below
             ``-hysteresis * threshold``.
@@ -80,6 +84,8 @@ class ConstraintSet:
         self_collision: bool = False,
         self_threshold: float = 0.01,
         self_gain: float | None = None,
+        dexterity: Dexterity | None = None,
+        dexterity_gain: float | None = None,
         release: str = "projection",
         hysteresis: float = 0.0,
         max_active: int | None = None,
@@ -100,18 +106,27 @@ class ConstraintSet:
             ("obstacle_gain", obstacle_gain),
             ("joint_gain", joint_gain),
             ("self_gain", self_gain),
+            ("dexterity_gain", dexterity_gain),
         ):
             if gain is not None and not (math.isfinite(gain) and gain > 0):
                 raise InputError(f"constraints.{field}", "a positive gain [1/s]", gain)
+        if dexterity is not None and not isinstance(dexterity, Dexterity):
+            raise InputError("constraints.dexterity", "a Dexterity(threshold=...)", dexterity)
         if not (math.isfinite(hysteresis) and hysteresis >= 0):
             raise InputError("constraints.hysteresis", "a number >= 0", hysteresis)
         self.robot = robot
         self.obstacles = list(obstacles)
         self.obstacle_rows = obstacle_rows
         self.obstacle_threshold = float(obstacle_threshold)
-        self.gains = {"obstacle": obstacle_gain, "joint": joint_gain, "self": self_gain}
+        self.gains = {
+            "obstacle": obstacle_gain,
+            "joint": joint_gain,
+            "self": self_gain,
+            "dexterity": dexterity_gain,
+        }
         self.form = form
         self.joint_limits = joint_limits
+        self.dexterity = dexterity
         self.self_threshold = float(self_threshold)
         self.release_rule = release
         self.hysteresis = float(hysteresis)
@@ -215,7 +230,9 @@ class ConstraintSet:
         nv = self.robot.nv
         free = nv if law == "pseudoinverse" else nv - m
         limit = free if self.max_active is None else min(int(self.max_active), free)
-        rows_wanted = self.obstacle_rows or self.joint_limits is not None
+        rows_wanted = (
+            self.obstacle_rows or self.joint_limits is not None or self.dexterity is not None
+        )
         if limit <= 0 and rows_wanted:
             raise InputError(
                 "constraints",
@@ -239,6 +256,12 @@ class ConstraintSet:
             }
             for i, o in enumerate(self.obstacles)
         ]
+
+    def dexterity_used(self) -> dict[str, Any] | None:
+        """The dexterity row's settings, as a run's summary reports them (None: no row)."""
+        if self.dexterity is None:
+            return None
+        return {"threshold": self.dexterity.threshold, "gain": self.gains["dexterity"]}
 
     def joint_limits_used(self) -> dict[str, Any] | None:
         """The joint-range rows' limits and thresholds, as a run's summary reports them."""

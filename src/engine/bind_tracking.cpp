@@ -90,7 +90,8 @@ PyTrackingRun make_run(nb::object model, int frame, std::vector<int> rows, bool 
     const ConstraintConfig cfg = config_from_set(constraints);
     const int m_rows = static_cast<int>(task.rows.size());
     out.constraints = std::make_unique<ConstraintRun>(cfg, m, m_rows, ls.kind, alpha, t,
-                                                      static_cast<int>(b.capacity));
+                                                      static_cast<int>(b.capacity), task.frame,
+                                                      task.rows);
     if (m_rows + std::max(out.constraints->limit(), 0) > n_rows) {
       throw std::invalid_argument("n_rows: fewer than the task's and the constraints' rows");
     }

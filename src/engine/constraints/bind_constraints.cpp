@@ -9,6 +9,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nanobind/eigen/dense.h>
@@ -89,6 +90,7 @@ ConstraintConfig config_from_set(nb::handle cset) {
   cfg.obstacle_gain = optional_float(gains["obstacle"]);
   cfg.joint_gain = optional_float(gains["joint"]);
   cfg.self_gain = optional_float(gains["self"]);
+  cfg.dexterity_gain = optional_float(gains.attr("get")("dexterity"));  // older dicts lack it
   const std::string release = nb::cast<std::string>(cset.attr("release_rule"));
   cfg.release = release == "sign" ? ReleaseRule::sign : ReleaseRule::projection;
   cfg.hysteresis = nb::cast<double>(cset.attr("hysteresis"));
@@ -117,6 +119,11 @@ ConstraintConfig config_from_set(nb::handle cset) {
     oc.geometry = o < static_cast<int>(geom.size()) ? geom[o] : -1;
     cfg.obstacles.push_back(oc);
     ++o;
+  }
+
+  nb::object dexterity = cset.attr("dexterity");
+  if (!dexterity.is_none()) {
+    cfg.dexterity = DexterityConfig{nb::cast<double>(dexterity.attr("threshold"))};
   }
 
   nb::object jl = cset.attr("joint_limits");
@@ -246,7 +253,8 @@ void bind_constraints(nb::module_& m) {
       [](nb::handle model_obj, const ConstraintConfig& cfg, int m_rows, const std::string& law,
          double alpha, const Vec& t, int n_rec, double damping, double dt, double beta_max,
          const Vec& K_task, const Mat& Q, const Mat& JT, const Mat& E, const Mat& FF,
-         const std::vector<bool>& exact, const std::vector<int>& record_slot) {
+         const std::vector<bool>& exact, const std::vector<int>& record_slot, int frame,
+         std::vector<int> task_rows) {
         const pinocchio::Model& model = borrow_model(model_obj.ptr());
         const int N = static_cast<int>(Q.rows());
         const int nv = model.nv;
@@ -256,7 +264,7 @@ void bind_constraints(nb::module_& m) {
           throw std::invalid_argument("constraint_trace: inconsistent array shapes");
         }
         const LawKind kind = law_kind(law);
-        ConstraintRun run(cfg, model, m_rows, kind, alpha, t, n_rec);
+        ConstraintRun run(cfg, model, m_rows, kind, alpha, t, n_rec, frame, std::move(task_rows));
         const int limit = run.limit();
         const int rows = m_rows + std::max(limit, 0);
         LawSettings s;
@@ -271,7 +279,7 @@ void bind_constraints(nb::module_& m) {
         const int n_obs = cfg.n_obstacles();
         std::vector<std::int32_t> v_out(N, 0);
         std::vector<double> J_out(N * L * nv, 0.0), e_out(N * L, 0.0), K_out(N * L, 0.0),
-            ff_out(N * L, 0.0), dmin(N), dist(N * n_obs);
+            ff_out(N * L, 0.0), dmin(N), dist(N * n_obs), manip(N);
         std::vector<std::int32_t> link(N * n_obs);
         std::vector<std::uint8_t> exact_out(N * n_obs);
         nb::list active_names, penetrations;
@@ -291,6 +299,7 @@ void bind_constraints(nb::module_& m) {
             ff_out[at] = ext.ff[m_rows + s_];
           }
           dmin[k] = run.min_distance;
+          manip[k] = run.manipulability;
           for (int o = 0; o < n_obs; ++o) {
             dist[k * n_obs + o] = run.dist_o[o];
             link[k * n_obs + o] = run.link_o[o];
@@ -312,6 +321,7 @@ void bind_constraints(nb::module_& m) {
         out["K"] = to_numpy(K_out.data(), {n, L});
         out["ff"] = to_numpy(ff_out.data(), {n, L});
         out["min_distance"] = to_numpy(dmin.data(), {n});
+        out["manipulability"] = to_numpy(manip.data(), {n});
         out["dist_o"] = to_numpy(dist.data(), {n, no});
         out["link_o"] = to_numpy(link.data(), {n, no});
         out["exact_o"] = to_numpy(exact_out.data(), {n, no});
@@ -324,10 +334,12 @@ void bind_constraints(nb::module_& m) {
       nb::arg("model"), nb::arg("config"), nb::arg("m"), nb::arg("law"), nb::arg("alpha"),
       nb::arg("t"), nb::arg("n_rec"), nb::arg("damping"), nb::arg("dt"), nb::arg("beta_max"),
       nb::arg("K_task"), nb::arg("Q"), nb::arg("JT"), nb::arg("E"), nb::arg("FF"),
-      nb::arg("exact"), nb::arg("record_slot"),
+      nb::arg("exact"), nb::arg("record_slot"), nb::arg("frame") = -1,
+      nb::arg("task_rows") = std::vector<int>{},
       "Test driver: ConstraintRun.update at each configuration Q[k] (task rows JT[k*m:(k+1)*m], "
-      "E[k], FF[k]; recorded in slot record_slot[k] >= 0); per-sample rows and distances, and "
-      "the run's records.");
+      "E[k], FF[k]; recorded in slot record_slot[k] >= 0; frame and task_rows: the task's, for "
+      "the dexterity row); per-sample rows, distances and manipulability, and the run's "
+      "records.");
 }
 
 }  // namespace clik

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <set>
 #include <stdexcept>
+#include <utility>
 
 #include <pinocchio/algorithm/joint-configuration.hpp>
 
@@ -42,7 +43,8 @@ const char* action_name(EventAction action) {
 }
 
 ConstraintRun::ConstraintRun(const ConstraintConfig& config, const pinocchio::Model& model, int m,
-                             LawKind law, double alpha, const Vec& t, int n_rec)
+                             LawKind law, double alpha, const Vec& t, int n_rec, int frame,
+                             std::vector<int> task_rows)
     : cfg_(config), model_(model), m_(m), law_(law), alpha_(alpha), t_(t) {
   if (model.nv != cfg_.nv || model.nq != cfg_.nq) {
     throw std::invalid_argument("ConstraintRun: the model is not the constraint set's robot");
@@ -59,13 +61,22 @@ ConstraintRun::ConstraintRun(const ConstraintConfig& config, const pinocchio::Mo
     throw std::invalid_argument("ConstraintRun: obstacles without link geometry to check");
   }
 
-  // Names, once: key = joint row | obstacle_base + i * n_obs + o | self_base + self pair.
-  names_.reserve(self_base_ + n_self_);
+  // Names, once: key = joint row | obstacle_base + i * n_obs + o | self_base + self pair
+  // | dexterity (the last).
+  names_.reserve(self_base_ + n_self_ + 1);
   for (int i = 0; i < n_joint_rows_; ++i) names_.push_back(cfg_.joint_limits->names[i]);
   for (int i = 0; i < n_links_; ++i) {
     for (int o = 0; o < n_obs_; ++o) names_.push_back(cfg_.pair_name(i, o));
   }
   for (int s = 0; s < n_self_; ++s) names_.push_back(cfg_.self_name(s));
+  if (cfg_.dexterity) {
+    if (frame < 0 || static_cast<int>(task_rows.size()) != m) {
+      throw std::invalid_argument("ConstraintRun: the dexterity row needs the task's frame and rows");
+    }
+    dexterity_key_ = static_cast<int>(names_.size());
+    names_.push_back("dexterity");
+    dex_.emplace(model, frame, std::move(task_rows));
+  }
   const int n_keys = static_cast<int>(names_.size());
 
   if (cfg_.scene) scene_.emplace(*cfg_.scene, cfg_.obstacles);
@@ -134,6 +145,7 @@ int ConstraintRun::update(int k, const Eigen::Ref<const Vec>& q, pinocchio::Data
   const double tk = t_[k];
   placed_ = false;
   evaluate(tk, q, data, exact);
+  if (dex_) evaluate_dexterity(ext);
   q_prev_ = q;
   has_prev_ = true;
   refresh_active(tk);
@@ -389,19 +401,35 @@ void ConstraintRun::evaluate_self(double tk, pinocchio::Data& data) {
   }
 }
 
+// _evaluate_dexterity: the error (D2) of the task rows; a candidate when positive or active.
+void ConstraintRun::evaluate_dexterity(const ExtendedTask& ext) {
+  const double thr = cfg_.dexterity->threshold;
+  manipulability = dex_->evaluate(ext.J.topRows(m_));
+  const double e = thr - manipulability;
+  if (e > 0.0 || is_active_[dexterity_key_]) {
+    Candidate c;
+    c.key = dexterity_key_;
+    c.kind = ConstraintKind::dexterity;
+    c.error = e;
+    c.scale = c.threshold = thr;
+    cand_.push_back(c);
+  }
+}
+
 // -- rows ------------------------------------------------------------------------------
 
 // _gain: the user's, else alpha (law (10)) or alpha / (2 max(1, |j|^2)).
 double ConstraintRun::gain(ConstraintKind kind, double row_norm2) const {
-  const std::optional<double>& given = kind == ConstraintKind::obstacle ? cfg_.obstacle_gain
-                                       : kind == ConstraintKind::joint  ? cfg_.joint_gain
-                                                                        : cfg_.self_gain;
+  const std::optional<double>& given = kind == ConstraintKind::obstacle  ? cfg_.obstacle_gain
+                                       : kind == ConstraintKind::joint     ? cfg_.joint_gain
+                                       : kind == ConstraintKind::dexterity ? cfg_.dexterity_gain
+                                                                           : cfg_.self_gain;
   if (given) return *given;
   if (law_ == LawKind::pseudoinverse) return alpha_;
   return 0.5 * alpha_ / std::max(1.0, row_norm2);
 }
 
-// _fill_rows: the active constraints' rows (15), (19) into the extended task (24)-(25).
+// _fill_rows: the active constraints' rows (15), (19), (D3) into the extended task (24)-(25).
 int ConstraintRun::fill_rows(pinocchio::Data& data, ExtendedTask& ext) {
   static const Vec3 still = Vec3::Zero();
   for (int s = 0; s < static_cast<int>(active_.size()); ++s) {
@@ -409,6 +437,9 @@ int ConstraintRun::fill_rows(pinocchio::Data& data, ExtendedTask& ext) {
     auto row = ext.J.row(m_ + s);
     if (c.kind == ConstraintKind::joint) {
       cfg_.joint_limits->row(c.index, row);
+      c.feed = 0.0;
+    } else if (c.kind == ConstraintKind::dexterity) {
+      dex_->gradient(model_, data, row);
       c.feed = 0.0;
     } else {  // obstacle (13)-(15), or a link pair: the second link in the obstacle's place
       point_jacobian(model_, data, c.joint, c.point_a, J6a_);
@@ -475,7 +506,7 @@ void ConstraintRun::record(int j) {
       code_keys_.push_back(c.key);
     }
     rec_active_(j, s) = code;
-    if (c.kind != ConstraintKind::joint) {
+    if (c.kind == ConstraintKind::obstacle || c.kind == ConstraintKind::self) {
       rec_witness_.block<1, 3>(j, 6 * s) = c.point_a.transpose();
       rec_witness_.block<1, 3>(j, 6 * s + 3) = c.point_b.transpose();
     }

@@ -8,16 +8,17 @@
 //   ConstraintConfig cfg = ...;  // from the Python ConstraintSet: `_engine.ConstraintConfig
 //                                // .from_set(cset)` (bind_constraints.cpp); see constraint_set.hpp
 //   int limit = cfg.row_limit(m, law);        // rows = m + limit for ExtendedTask and Law
-//   ConstraintRun crun(cfg, model, m, law, alpha, t, n_rec);
+//   ConstraintRun crun(cfg, model, m, law, alpha, t, n_rec, frame, task_rows);
 //
 //   cfg is copied (the run keeps it; its `owner` keeps the Python GeometryModel alive);
 //   `model` (the robot's pinocchio::Model, cset.robot.model) must outlive the run; t is the
 //   run's time grid (t[k] is sample k's time, dt = t[1] - t[0]); n_rec the recorded
-//   samples (Recorder.capacity); alpha the task's largest gain [1/s].
+//   samples (Recorder.capacity); alpha the task's largest gain [1/s]; frame and task_rows
+//   the task's frame and rows among (x, y, z, rx, ry, rz) (needed by the dexterity row).
 //
 // Per sample k, after the loop computed pinocchio::computeJointJacobians(model, data, q)
 // (data.oMi and data.J at q; the frame placement is the loop's business) and wrote the
-// task rows 0..m of `ext` (J, e, ff; K set at construction):
+// task rows 0..m of `ext` (J, e, ff; K set at construction; the dexterity row reads J):
 //
 //   int v = crun.update(k, q, data, ext, law, exact);  // exact = this sample is recorded
 //   int r = m + v;                                     // the law runs on rows 0..r
@@ -30,6 +31,7 @@
 //     crun.dist_o[o], crun.exact_o[o]    per obstacle: nearest distance (exact when exact_o),
 //     crun.link_o[o]                     and its link geometry (cfg.link_labels[link_o[o]])
 //     crun.self_penetrations             (key, distance < 0) of link pairs evaluated this sample
+//     crun.manipulability                w (D1) of the task rows (NaN without a dexterity row)
 //   For the violation monitor (tracking.py observe_limits):
 //     if min_distance < 0: for o with dist_o[o] < 0: key cfg.pair_name(link_o[o], o)
 //     for (key, d) in self_penetrations: crun.name(key)
@@ -65,17 +67,17 @@ namespace clik {
 // A constraint is "at its threshold" when its error is below this fraction of its scale.
 constexpr double AT_THRESHOLD = 1e-6;
 
-enum class ConstraintKind : std::uint8_t { joint, obstacle, self };
+enum class ConstraintKind : std::uint8_t { joint, obstacle, self, dexterity };
 
 // One constraint whose row may enter the extended task at this sample (Candidate).
 // `key` names it: ConstraintRun::name(key) is joint:<joint>:lower|upper,
-// obstacle:<obstacle>:<link> or self:<link a>:<link b>.
+// obstacle:<obstacle>:<link>, self:<link a>:<link b> or dexterity.
 struct Candidate {
   int key = -1;
   ConstraintKind kind = ConstraintKind::joint;
-  double error = 0.0;      // positive inside the threshold [m, rad or m^2]
+  double error = 0.0;      // positive inside the threshold [m, rad, m^2 or m^p]
   double scale = 1.0;      // the threshold in the error's unit
-  double threshold = 0.0;  // d_o or d_q [m or rad]
+  double threshold = 0.0;  // d_o, d_q [m or rad] or w_min [m^p]
   double feed = 0.0;       // feed-forward (14)
   int index = -1;          // joint-range row (joint rows)
   int joint = -1, joint_b = -1;  // parent joints of the witness points
@@ -97,8 +99,10 @@ struct Event {
 
 class ConstraintRun {
  public:
+  // Throws std::invalid_argument for a dexterity row without the task's frame and rows.
   ConstraintRun(const ConstraintConfig& config, const pinocchio::Model& model, int m, LawKind law,
-                double alpha, const Vec& t, int n_rec);
+                double alpha, const Vec& t, int n_rec, int frame = -1,
+                std::vector<int> task_rows = {});
   // The scene points into the run's own copy of the config: neither copied nor moved.
   ConstraintRun(const ConstraintRun&) = delete;
   ConstraintRun& operator=(const ConstraintRun&) = delete;
@@ -118,6 +122,7 @@ class ConstraintRun {
   std::vector<char> exact_o;        // (n_obs)
   Eigen::VectorXi link_o;           // (n_obs) link geometry of dist_o, -1 before the first
   std::vector<std::pair<int, double>> self_penetrations;  // (key, distance < 0)
+  double manipulability = std::numeric_limits<double>::quiet_NaN();  // w (D1) [m^p]
 
   // -- names and results -----------------------------------------------------------
   int limit() const { return limit_; }
@@ -152,6 +157,7 @@ class ConstraintRun {
   void evaluate_obstacles(double tk, pinocchio::Data& data, bool exact);
   void obstacle_candidate(int i, int o, Candidate& c);
   void evaluate_self(double tk, pinocchio::Data& data);
+  void evaluate_dexterity(const ExtendedTask& ext);
   void place(double tk, const pinocchio::Data& data);
   void refresh_active(double tk);
   void activate(double tk);
@@ -169,8 +175,10 @@ class ConstraintRun {
   Vec t_;
   int n_obs_, n_links_, n_self_, n_joint_rows_;
   int obstacle_base_, self_base_;  // first key of the obstacle pairs and of the link pairs
+  int dexterity_key_ = -1;         // the dexterity row's key (after the link pairs)
   std::vector<std::string> names_;
   std::optional<CollisionScene> scene_;
+  std::optional<DexterityRow> dex_;
   bool placed_ = false;
 
   // candidates and the active set (buffers at their largest sizes)

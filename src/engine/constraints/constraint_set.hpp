@@ -1,6 +1,6 @@
 // What a run needs from a ConstraintSet (mirrors clik/constraints/constraint_set.py):
-// obstacles and their collision scene, joint ranges, thresholds, gains, the
-// release rule, the bound on active rows. Filled from the Python ConstraintSet
+// obstacles and their collision scene, joint ranges, the dexterity row, thresholds,
+// gains, the release rule, the bound on active rows. Filled from the Python ConstraintSet
 // by `_engine.ConstraintConfig.from_set(cset)` (bind_constraints.cpp); build one
 // per run (from_set reads the set as it is then: a later set_obstacles or
 // move_obstacle on the Python set is not seen by an existing config).
@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "constraints/collision_scene.hpp"
+#include "constraints/dexterity.hpp"
 #include "constraints/joint_limits.hpp"
 #include "constraints/obstacle.hpp"
 #include "constraints/obstacle_rows.hpp"
@@ -31,6 +32,8 @@ struct ConstraintConfig {
   ObstacleForm form = ObstacleForm::normalized;
   std::optional<double> obstacle_gain, joint_gain, self_gain;  // [1/s]; none: the law's default
   std::optional<JointLimits> joint_limits;
+  std::optional<DexterityConfig> dexterity;   // the dexterity row (D1)-(D3)
+  std::optional<double> dexterity_gain;       // [1/s]; none: the law's default
   double self_threshold = 0.01;  // [m]
   ReleaseRule release = ReleaseRule::projection;
   double hysteresis = 0.0;       // sign rule: release when e < -hysteresis * scale
@@ -64,7 +67,7 @@ struct ConstraintConfig {
   int row_limit(int m, LawKind law) const {
     const int free = law == LawKind::pseudoinverse ? nv : nv - m;
     const int limit = max_active ? std::min(*max_active, free) : free;
-    const bool rows_wanted = obstacle_rows || joint_limits.has_value();
+    const bool rows_wanted = obstacle_rows || joint_limits.has_value() || dexterity.has_value();
     if (limit <= 0 && rows_wanted) {
       throw std::invalid_argument(
           "constraints: constraint rows need a redundant task (n - m > 0) under laws (9) and "
