@@ -35,12 +35,16 @@ def header(report: dict[str, Any]) -> list[str]:
     """
     m = report["machine"]
     v = report["versions"]
+    share = m.get("cpu_share")
+    busy = ""
+    if share is not None and share < 1:
+        busy = ", below 1: other processes took the CPU, figures inflated"
     return [
         "# clik bench" + (" (quick: a smoke run with tiny counts, not figures)" * report["quick"]),
         "",
         f"Machine: {m['cpu']}, {m['cores']} cores, Python {m['python']}, "
         f"load {m.get('load_average_1min_start', '-')} at start, CPU share "
-        f"{m.get('cpu_share', '-')} (below 1: other processes ran; figures inflated). "
+        f"{m.get('cpu_share', '-')}{busy} (the bench's CPU time over its wall time). "
         f"clik {v['clik']}, pin {v['pin']}, coal {v['coal']}, numpy {v['numpy']}, "
         f"pink {v['pin-pink'] or '-'} ({report['pink']['solver'] or 'not run'}).",
     ]
