@@ -1002,6 +1002,39 @@ INFEASIBLE = [
 
 CLI = [
     pytest.param(
+        lambda env: env.command(
+            "solve", str(scenario_path("case_study_both")), "--out", out(env), "--export", "xml"
+        ),
+        Exits(2, ["--export", "invalid choice: 'xml'", "'csv', 'json'"]),
+        id="cli-export-unknown-format",
+    ),
+    pytest.param(
+        lambda env: env.command(
+            "solve",
+            str(scenario_path("case_study_both")),
+            "--out",
+            out(env),
+            "--export",
+            "csv",
+            "--export-every",
+            "0",
+        ),
+        Exits(2, ["--export-every", "expected an integer >= 1, got '0'"]),
+        id="cli-export-every-zero",
+    ),
+    pytest.param(
+        lambda env: env.cli(
+            "solve",
+            str(scenario_path("case_study_both")),
+            "--out",
+            out(env),
+            "--export-every",
+            "5",
+        ),
+        Exits(2, ["--export-every", "to be given with --export"]),
+        id="cli-export-every-without-export",
+    ),
+    pytest.param(
         lambda env: env.cli("solve", str(env.scenario("dt = 0.001", "dt = 0")), "--out", out(env)),
         Exits(2, ["clik: error:", "solver.dt: expected a number > 0 [s]"]),
         id="cli-bad-scenario",
