@@ -5,13 +5,16 @@ code tells the kind: 0 success, 1 a sweep with failed runs (``clik sweep``:
 a run raised, or ended ``violated``, ``velocity_limit`` or ``diverged``; every
 row is still written), 2 bad input, 3 infeasible (the run ended ``violated``,
 ``velocity_limit``, ``deadlock`` or ``diverged``; its outputs are still
-written), 4 internal.
+written), 4 internal; 130 after Ctrl-C, 143 after SIGTERM (the output folder is
+then left as it was: :mod:`clik.out_folder`), 141 when stdout is closed early
+(``clik robots | head -1``: quietly, like a process stopped by SIGPIPE).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -21,7 +24,8 @@ from tqdm import tqdm
 
 from clik.errors import EXIT_CODES, ClikError, InputError
 from clik.export import FORMATS, check_exportable
-from clik.io import prepare_out
+from clik.io import output_errors
+from clik.out_folder import output_folder
 from clik.result import FAILED_STATUSES, TrackingResult, write_outputs
 
 if TYPE_CHECKING:
@@ -30,6 +34,9 @@ if TYPE_CHECKING:
 
 SWEEP_FAILED = 1
 """Exit code of ``clik sweep`` when a run in its folder raised or ended violated or diverged."""
+
+BROKEN_PIPE = 141
+"""Exit code when stdout was closed by its reader (``| head``): 128 + SIGPIPE, as a shell says."""
 
 
 class ProgressBar:
@@ -56,14 +63,19 @@ class ProgressBar:
             self.bar.close()
 
 
+def _number(value: float | None, spec: str) -> str:
+    """``value`` formatted with ``spec``; ``null`` for a value not finite in the summary."""
+    return "null" if value is None else format(value, spec)
+
+
 def print_summary(name: str, summary: dict) -> None:
     """A few lines for a person."""
     unit = "rad" if summary["info"].get("task") == "orientation" else "m"
     print(f"{name}: {summary['status']} ({summary['reason']})")
     print(
-        f"  steps {summary['steps']}, wall time {summary['wall_time_s']:.3f} s, "
-        f"max tracking error {summary['max_task_error']:.3e} {unit}, "
-        f"final {summary['final_task_error']:.3e} {unit}"
+        f"  steps {summary['steps']}, wall time {_number(summary['wall_time_s'], '.3f')} s, "
+        f"max tracking error {_number(summary['max_task_error'], '.3e')} {unit}, "
+        f"final {_number(summary['final_task_error'], '.3e')} {unit}"
     )
     if summary.get("min_obstacle_distance") is not None:
         print(f"  min link-obstacle distance {summary['min_obstacle_distance']:.4f} m")
@@ -98,10 +110,13 @@ def cmd_solve(args: argparse.Namespace) -> int:
         run.tracker.engine = args.engine
     if args.export:
         check_exportable(run.robot.model)
-    out = prepare_out(Path(args.out), args.force)
-    result = run.execute(ProgressBar(run.scenario.name, None if not args.quiet else False))
-    summary = write_outputs(result, out)
-    extras = write_extras(args, result, out, run.scenario.name)
+    out = Path(args.out)
+    with output_folder(out, args.force) as work:
+        result = run.execute(ProgressBar(run.scenario.name, None if not args.quiet else False))
+        with output_errors(out):
+            summary = write_outputs(result, work)
+            written = write_extras(args, result, work, run.scenario.name)
+    extras = [out / p.relative_to(work) for p in written]
     if not args.quiet:
         print_summary(run.scenario.name, summary)
         print(f"  wrote {out / 'summary.json'} and {out / 'trajectory.npz'}")
@@ -259,14 +274,17 @@ def cmd_reach(args: argparse.Namespace) -> int:
 
     spec = _reach_spec(args)
     check_spec(spec)
-    out = prepare_out(Path(args.out), args.force)
-    reach = reach_map(
-        spec,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        progress=False if args.quiet else None,
-    )
-    written = write_reach(reach, out, html=not args.no_html)
+    out = Path(args.out)
+    with output_folder(out, args.force) as work:
+        reach = reach_map(
+            spec,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            progress=False if args.quiet else None,
+        )
+        with output_errors(out):
+            files = write_reach(reach, work, html=not args.no_html)
+    written = {kind: out / path.relative_to(work) for kind, path in files.items()}
     if not args.quiet:
         counts = reach.counts()
         line = (
@@ -489,19 +507,34 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+def _silence_stdout() -> None:
+    """Point stdout at ``os.devnull``: its reader is gone, and a last flush would fail."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (AttributeError, OSError, ValueError):  # no file descriptor (a test's capture)
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``clik`` command."""
+    """Entry point of the ``clik`` command (exit codes: see the module's docstring)."""
     args = parser().parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        code = int(args.func(args) or 0)
+        sys.stdout.flush()  # here, not at exit: a closed pipe is then a BrokenPipeError below
+        return code
     except ClikError as exc:
         if args.debug:
             raise
         print(f"clik: error: {exc}", file=sys.stderr)
         return exc.exit_code
-    except KeyboardInterrupt:
-        print("clik: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM during a run (out_folder.Terminated)
+        code = getattr(exc, "exit_code", 130)
+        print("clik: " + ("interrupted" if code == 130 else "terminated"), file=sys.stderr)
+        return int(code)
+    except BrokenPipeError:
+        _silence_stdout()
+        return BROKEN_PIPE
     except Exception as exc:  # an internal error: say so, keep the traceback behind --debug
         if args.debug:
             raise

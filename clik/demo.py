@@ -5,7 +5,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from clik.io import prepare_out
+from clik.io import output_errors
+from clik.out_folder import output_folder
 from clik.result import TrackingResult, write_outputs
 from clik.scenarios import CASE_STUDY, scenario_path
 
@@ -37,28 +38,32 @@ def run_demo(
     quiet: bool = False,
     names: tuple[str, ...] = CASE_STUDY,
 ) -> int:
-    """Run the case-study scenarios; write each run's outputs under ``out/<name>/``."""
+    """Run the case-study scenarios; write each run's outputs under ``out/<name>/``.
+
+    ``out`` is written all at once (:func:`clik.out_folder.output_folder`): a
+    stopped demo leaves it as it was.
+    """
     from clik.runner import build
 
-    prepare_out(out, force)
-    results = []
-    for name in names:
-        run = build(scenario_path(name))
-        result = run.execute()
-        folder = out / name
-        folder.mkdir(exist_ok=True)
-        write_outputs(result, folder)
-        if html:
-            from clik.viz import export_html
+    out = Path(out)
+    with output_folder(out, force) as work:
+        results = []
+        for name in names:
+            result = build(scenario_path(name)).execute()
+            with output_errors(out):
+                folder = work / name
+                folder.mkdir()
+                write_outputs(result, folder)
+                if html:
+                    from clik.viz import export_html
 
-            export_html(result, out / f"{name}.html")
-        results.append(result)
-    table = case_study_table(list(names), results)
-    written: list[Path] = []
-    if plots:
-        from clik.plot import case_study_figures
-
-        written = case_study_figures(dict(zip(names, results, strict=True)), out)
+                    export_html(result, work / f"{name}.html")
+            results.append(result)
+        table = case_study_table(list(names), results)
+        with output_errors(out):
+            (work / "table.txt").write_text(table + "\n")
+            written = _figures(names, results, work) if plots else []
+    written = [out / p.relative_to(work) for p in written]
     if not quiet:
         print(table)
         print(f"\nwrote {out}/<run>/summary.json and trajectory.npz for {len(names)} runs")
@@ -66,5 +71,11 @@ def run_demo(
             print(f"wrote {len(names)} HTML scenes: {out}/<run>.html")
         if written:
             print("wrote figures: " + ", ".join(str(p) for p in written))
-    (out / "table.txt").write_text(table + "\n")
     return 0
+
+
+def _figures(names: tuple[str, ...], results: list[TrackingResult], out: Path) -> list[Path]:
+    """The paper's figures of the runs, written into ``out``; the files written."""
+    from clik.plot import case_study_figures
+
+    return case_study_figures(dict(zip(names, results, strict=True)), out)

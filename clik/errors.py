@@ -135,6 +135,39 @@ class OutputExistsError(ClikError, FileExistsError):
         super().__init__(f"output folder {self.path} exists already; pass --force to overwrite it")
 
 
+class OutputError(ClikError, OSError):
+    """An output folder or file that cannot be written: the OS reason, with the path.
+
+    Attributes:
+        path: The output folder (or file) concerned.
+        reason: Why, in words (e.g. ``No space left on device (ENOSPC)``).
+    """
+
+    def __init__(self, path: str | Path, reason: str) -> None:
+        self.path = str(path)
+        self.reason = reason
+        Exception.__init__(self, f"cannot write output {self.path}: {reason}")
+
+    def __str__(self) -> str:  # OSError formats its arguments otherwise
+        return str(self.args[0])
+
+
+class OutputLockedError(OutputError):
+    """Another clik run is writing into the same output folder (it holds its lock).
+
+    Attributes:
+        lock: The lock file the other run holds.
+    """
+
+    def __init__(self, path: str | Path, lock: str | Path) -> None:
+        self.lock = str(lock)
+        super().__init__(
+            path,
+            f"another clik run is writing there (it holds {self.lock}); wait for it to "
+            "finish or choose another --out",
+        )
+
+
 class GeometryError(ClikError, ValueError):
     """An obstacle or link geometry is degenerate or cannot be read."""
 

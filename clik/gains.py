@@ -8,6 +8,7 @@ notes"); ``alpha = 1/dt`` is the paper's optimal scalar choice.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -31,6 +32,14 @@ def row_gains(
 
 
 def stability_margin(J: np.ndarray, K: np.ndarray, dt: float) -> float:
-    """``dt lambda_max(K^{1/2} J J^T K^{1/2})``: explicit Euler is stable below 2."""
+    """``dt lambda_max(K^{1/2} J J^T K^{1/2})``: explicit Euler is stable below 2.
+
+    Infinite when ``J J^T`` is not finite (its eigenvalues would not converge): no bound
+    holds, and the run's own non-finite check stops it ``diverged``.
+    """
     s = np.sqrt(K)[:, None] * J
-    return float(dt * np.linalg.eigvalsh(s @ s.T)[-1])
+    with np.errstate(over="ignore", invalid="ignore"):
+        A = s @ s.T
+    if not np.isfinite(A).all():
+        return math.inf
+    return float(dt * np.linalg.eigvalsh(A)[-1])

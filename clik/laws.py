@@ -106,7 +106,19 @@ def solve_small(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     y = _solve1(A, b)  # hot loops run under np.errstate(invalid="ignore")
     if math.isfinite(y.dot(y)):
         return y
+    if not finite(A, b):  # the SVD of a non-finite matrix may never return: give NaN back
+        return np.full(b.shape, np.nan)
     return np.linalg.pinv(A).dot(b)  # singular A: gesv gave NaN
+
+
+def finite(*arrays: np.ndarray) -> bool:
+    """Whether every entry of every array is finite (a solver is only called on such).
+
+    LAPACK's SVD and eigensolvers may loop without end, or fail, on inf or NaN; the laws
+    return NaN joint velocities instead, which the tracking loop stops as ``diverged``
+    (:func:`clik.stop_checks.non_finite_reason`), as the compiled engine does.
+    """
+    return all(math.isfinite(float(np.sum(np.abs(a)))) for a in arrays)
 
 
 def _numpy_solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -156,6 +168,8 @@ def damped_solve(A: np.ndarray, b: np.ndarray, epsilon: float, damping: float) -
         epsilon: Singular value [row unit per rad] below which damping starts.
         damping: ``lambda_0``, the user's constant damping (0: none).
     """
+    if not finite(A, b):
+        return np.full(b.shape, np.nan)
     w, V = np.linalg.eigh(A)
     np.maximum(w, epsilon * epsilon, out=w)
     w += damping * damping
@@ -219,6 +233,9 @@ def prioritized(
         The part of the task demand the law could not realise, ``|b - J qdot| / |b|``
         (0 when tracked exactly; near 1 when the task is blocked).
     """
+    if not finite(J, b_task, C, b_constraint):  # no solver call on inf or NaN
+        out[:] = np.nan
+        return 0.0
     scale = math.sqrt(float(np.max(np.einsum("ij,ij->i", J, J)))) if J.size else 0.0
     epsilon = CONDITION_RATIO * scale
     if C.shape[0]:

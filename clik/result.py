@@ -18,7 +18,7 @@ import numpy as np
 
 from clik.errors import InputError
 from clik.export import FORMATS, check_every, check_formats, joint_trajectory, write_trajectory
-from clik.io import atomic_write, write_json
+from clik.io import atomic_write, json_safe, json_text
 from clik.manipulability import manipulability_record, min_manipulability
 from clik.velocity_report import VelocityLimits, model_velocity_limits, velocity_report
 
@@ -240,9 +240,24 @@ class TrackingResult:
 def write_outputs(result: TrackingResult, out: Path) -> dict[str, Any]:
     """Write ``trajectory.npz`` then ``summary.json`` into ``out``; returns the summary.
 
-    The summary is written last: it exists only once both files are complete.
+    All or nothing: the summary is made JSON-safe and turned into text before
+    anything is written. A value that is not finite (the distance to an obstacle
+    placed at 1e308, ...) becomes ``null``, and its key path is listed under
+    ``non_finite`` (present only then). An old ``summary.json`` is removed first
+    and the new one written last, so a ``summary.json`` sits only beside the
+    complete ``trajectory.npz`` of the same run; when writing the summary fails,
+    the new ``trajectory.npz`` is removed too.
     """
-    summary = result.summary()
-    result.save(out / "trajectory.npz")
-    write_json(out / "summary.json", summary)
+    summary, replaced = json_safe(result.summary())
+    if replaced:
+        summary["non_finite"] = replaced
+    text = json_text(summary)
+    npz, json_file = out / "trajectory.npz", out / "summary.json"
+    json_file.unlink(missing_ok=True)
+    result.save(npz)
+    try:
+        atomic_write(json_file, lambda f: f.write(text), mode="w")
+    except BaseException:
+        npz.unlink(missing_ok=True)
+        raise
     return summary

@@ -48,6 +48,7 @@ from clik.errors import (
     UnknownRobotError,
     native_message,
 )
+from clik.mesh_check import vertex_problem
 from clik.urdf_check import check_urdf, parse_xml
 from clik.xacro_expand import check_xacro_args, expand_xacro, is_xacro
 
@@ -66,6 +67,18 @@ OTHER = "other"
 
 UNITS = ("rad", "deg")
 """Units of revolute joint values a user may write (prismatic values are always metres)."""
+
+
+class ReferenceClippedWarning(UserWarning):
+    """The robot's own reference configuration lay outside its limits and was clipped.
+
+    Attributes:
+        joints: Joint name -> (reference value, lower limit, upper limit) [rad or m].
+    """
+
+    def __init__(self, message: str, joints: dict[str, tuple[float, float, float]]) -> None:
+        super().__init__(message)
+        self.joints = joints
 
 
 class MimicJointWarning(UserWarning):
@@ -259,6 +272,7 @@ class Robot:
         mimics = _mimic_joints(root, urdf)
         digest = _digest(urdf) if text is None else None  # xacro: the text is kept
         model, collision_model = _build_models(urdf, dirs, text)
+        _check_mesh_extents(urdf, collision_model)
         q_reference = _reference_configuration(model, files.srdf, files.posture)
         robot = cls(files.name, urdf.resolve(), dirs, model, collision_model, q_reference)
         robot._source_digest = digest
@@ -796,6 +810,29 @@ def _build_models(
     return model, collision_model
 
 
+def _check_mesh_extents(urdf: Path, collision_model: pin.GeometryModel) -> None:
+    """Refuse a collision mesh whose scaled vertices leave the accepted range.
+
+    The cheap checks (:func:`clik.urdf_check.check_urdf`) bound a binary STL's
+    vertices from the file; other formats are bounded here, after loading and
+    before any convex hull is built from them.
+
+    Raises:
+        RobotLoadError: A mesh's vertices are not finite or beyond
+            :data:`~clik.mesh_check.MAX_COORDINATE` [m] from its origin.
+    """
+    for geometry_object in collision_model.geometryObjects:
+        vertices = getattr(geometry_object.geometry, "vertices", None)
+        if not callable(vertices):
+            continue  # a primitive shape: its sizes were checked in the URDF
+        problem = vertex_problem(np.asarray(vertices()))
+        if problem is not None:
+            mesh = geometry_object.meshPath or geometry_object.name
+            raise RobotLoadError(
+                urdf, f"collision geometry {geometry_object.name!r} ({mesh}): {problem}"
+            )
+
+
 def _q_slice(model: pin.Model, joint_id: int) -> slice:
     """The configuration values of one joint."""
     joint = model.joints[joint_id]
@@ -830,9 +867,47 @@ def _reference_configuration(
         parse_xml(srdf)
         pin.loadReferenceConfigurations(model, str(srdf), False)
         if posture in model.referenceConfigurations:
-            return pin.normalize(model, model.referenceConfigurations[posture].copy())
+            q = pin.normalize(model, model.referenceConfigurations[posture].copy())
+            return _clipped_reference(model, q, posture)
     q = pin.neutral(model)
     return np.clip(q, model.lowerPositionLimit, model.upperPositionLimit)
+
+
+def _clipped_reference(model: pin.Model, q: np.ndarray, posture: str) -> np.ndarray:
+    """``q`` with every revolute and prismatic joint clipped into its limits (warned).
+
+    Some example-robot-data robots (kinova, simple_humanoid, alex_psyonic_hands) ship a
+    reference posture outside their own URDF limits; the nearest configuration inside
+    them is the start they can be in.
+
+    Warns:
+        ReferenceClippedWarning: Some joints were clipped; it names each one, its value
+            and its limits.
+    """
+    clipped: dict[str, tuple[float, float, float]] = {}
+    for name, joint in zip(model.names[1:], model.joints[1:], strict=True):
+        if joint_kind(joint) not in (REVOLUTE, PRISMATIC):
+            continue
+        i = joint.idx_q
+        low, high = float(model.lowerPositionLimit[i]), float(model.upperPositionLimit[i])
+        value = float(q[i])
+        if low <= high and not low <= value <= high:
+            q[i] = min(max(value, low), high)
+            clipped[str(name)] = (value, low, high)
+    if clipped:
+        listed = "; ".join(
+            f"{n!r} = {v:.6g} clipped into [{lo:.6g}, {hi:.6g}]"
+            for n, (v, lo, hi) in clipped.items()
+        )
+        warnings.warn(
+            ReferenceClippedWarning(
+                f"the reference configuration {posture!r} lies outside the robot's own joint "
+                f"limits; clipped into them: {listed}",
+                clipped,
+            ),
+            stacklevel=4,
+        )
+    return q
 
 
 def _our_robots() -> dict[str, Path]:

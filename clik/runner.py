@@ -26,7 +26,8 @@ from clik.errors import (
 from clik.reach import reach_bound
 from clik.result import TrackingResult
 from clik.robot import Robot
-from clik.scenario import Scenario, load_scenario
+from clik.scenario import Scenario, check_dt, load_scenario
+from clik.schema import Table
 from clik.speed_limits import SpeedLimits
 from clik.task import Task
 from clik.tracking import ProgressCallback, Tracker
@@ -66,6 +67,10 @@ class Run:
         result.info["scenario_file"] = str(self.scenario.file.resolve())
         result.info["robot_source"] = self.scenario.robot["source"]
         result.info["robot_lock"] = dict(self.scenario.robot["lock"])
+        cset = self.tracker.constraints
+        scene = None if cset is None else cset.scene
+        if scene is not None:  # hulls coal could not build: not checked against obstacles
+            result.info["unmonitored_geometries"] = list(scene.skipped_geometries)
         if self.scenario.robot.get("xacro_args"):
             result.info["robot_xacro_args"] = dict(self.scenario.robot["xacro_args"])
         return result
@@ -133,6 +138,10 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
     except InputError as exc:
         _check_goal_reach(scenario, robot, task)  # name the real cause first
         raise _where(scenario, f"trajectory.{exc.field}", exc) from None
+    if scenario.trajectory["duration"] is None:  # timed by cruise_speed: known only now
+        check_dt(
+            Table({}, scenario.file, "solver"), scenario.solver["dt"], float(trajectory.duration)
+        )
     constraints = None
     if scenario.obstacles or any(
         c.get("enabled") for c in scenario.constraints.values() if isinstance(c, dict)
@@ -152,7 +161,8 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
             engine=solver["engine"],
         )
     except InputError as exc:
-        raise _where(scenario, f"solver.{exc.field}", exc) from None
+        key = "solver.law" if exc.field == "constraints" else f"solver.{exc.field}"
+        raise _where(scenario, key, exc) from None
     return Run(scenario, robot, task, trajectory, tracker, q0, _speed_limits(scenario, robot))
 
 

@@ -37,7 +37,17 @@ from clik.bounds import MAX_STEPS
 from clik.engine import ENGINES
 from clik.errors import ClikError, ScenarioError
 from clik.robot import JointValues
-from clik.schema import Table
+from clik.schema import (
+    MAX_ANGLE,
+    MAX_GAIN_DT,
+    MAX_JOINT_VALUE,
+    MAX_LENGTH,
+    MAX_SPEED,
+    MIN_DURATION,
+    MIN_SAMPLES,
+    SCALE_RANGE,
+    Table,
+)
 from clik.speed_limits import MAX_PASSES, MAX_SCALE
 from clik.xacro_expand import is_xacro
 
@@ -99,7 +109,7 @@ def load_scenario(path: str | Path) -> Scenario:
     if not path.is_file():
         raise ScenarioError(path, "", "no such scenario file")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = tomllib.loads(path.read_text(encoding="utf-8").removeprefix("\ufeff"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ScenarioError(path, "", f"not valid TOML ({exc})") from None
     except RecursionError:  # tomllib recurses on nested arrays and inline tables
@@ -126,7 +136,8 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
     ini = top.table("initial")
     unit = ini.string("unit", "rad", UNITS)
     q_raw = ini.raw("q", "reference")
-    initial_q = None if q_raw == "reference" else JointValues(ini.vector("q"), unit)
+    q_bound = MAX_JOINT_VALUE / _angle_scale(ini)
+    initial_q = None if q_raw == "reference" else JointValues(ini.vector("q", bound=q_bound), unit)
     ini.done()
 
     tsk = top.table("task", required=True)
@@ -144,46 +155,79 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
 
     trajectory = _trajectory(top.table("trajectory", required=True), folder, has_orientation)
 
-    slv = top.table("solver")
-    gain = slv.raw("gain", 1000.0)
-    if isinstance(gain, list):
-        gain = slv.vector("gain")
-        if any(g <= 0 for g in gain):
-            raise slv.error("gain", "positive numbers [1/s]", gain)
-    else:
-        gain = slv.number("gain", 1000.0, minimum=0.0, strict=True, unit="[1/s]")
-    solver = {
-        "law": slv.string("law", "transpose", ("transpose", "nonlinear", "pseudoinverse")),
-        "gain": gain,
-        "dt": slv.number("dt", 1e-3, minimum=0.0, strict=True, unit="[s]"),
-        "damping": slv.number("damping", 0.0, minimum=0.0),
-        "record_every": slv.number("record_every", 1, minimum=1, integer=True),
-        "settle": slv.number("settle", 0.0, minimum=0.0, unit="[s]"),
-        "engine": slv.string("engine", "compiled", ENGINES),
-    }
-    if trajectory["duration"] is not None:
-        steps = (trajectory["duration"] + solver["settle"]) / solver["dt"] + 1
-        if steps > MAX_STEPS:
-            total = trajectory["duration"] + solver["settle"]
-            raise slv.error(
-                "dt",
-                f"a step giving at most {MAX_STEPS:.0e} steps over trajectory.duration + "
-                f"solver.settle = {total:g} s (this one gives {steps:.3g})",
-                solver["dt"],
-            )
-    slv.done()
+    solver = _solver(top.table("solver"), trajectory["duration"])
 
     obstacles = [_obstacle(t, folder) for t in top.tables("obstacles")]
     names = [o["name"] for o in obstacles]
     if len(set(names)) != len(names):
         raise ScenarioError(file, "obstacles", f"expected distinct obstacle names, got {names}")
-    constraints = _constraints(top.table("constraints"))
+    constraints = _constraints(top.table("constraints"), solver["dt"])
     velocity_limits = constraints.pop("velocity_limits")
     top.done()
     return Scenario(
         file, name, robot, initial_q, task, trajectory, solver, obstacles, constraints,
         velocity_limits=velocity_limits, raw=data,
     )  # fmt: skip
+
+
+def _gain(table: Table, name: str, dt: float, default: Any = None) -> Any:
+    """A gain [1/s] (> 0), a number or (``per_row``) a list, with ``gain * dt <= MAX_GAIN_DT``."""
+    value = table.raw(name, default)
+    if isinstance(value, list):
+        gains = table.vector(name)
+        if any(g <= 0 for g in gains):
+            raise table.error(name, "positive numbers [1/s]", gains)
+    else:
+        gains = table.number(name, default, minimum=0.0, strict=True, unit="[1/s]")
+        if gains is None:
+            return None
+    if max(gains if isinstance(gains, list) else [gains]) * dt > MAX_GAIN_DT:
+        raise table.error(
+            name,
+            f"a gain [1/s] with gain * solver.dt <= {MAX_GAIN_DT:g} (solver.dt = {dt:g} s; "
+            "law (10) is stable only for gain * dt < 2)",
+            value,
+        )
+    return gains
+
+
+def _solver(slv: Table, duration: float | None) -> dict[str, Any]:
+    """The ``[solver]`` table; ``duration`` [s] (None: from ``cruise_speed``) bounds ``dt``."""
+    dt = slv.number("dt", 1e-3, minimum=0.0, strict=True, unit="[s]")
+    if duration is not None:
+        check_dt(slv, dt, duration)
+    solver = {
+        "law": slv.string("law", "transpose", ("transpose", "nonlinear", "pseudoinverse")),
+        "gain": _gain(slv, "gain", dt, 1000.0),
+        "dt": dt,
+        "damping": slv.number("damping", 0.0, minimum=0.0, bound=MAX_LENGTH),
+        "record_every": slv.number("record_every", 1, minimum=1, integer=True),
+        "settle": slv.number("settle", 0.0, minimum=0.0, unit="[s]"),
+        "engine": slv.string("engine", "compiled", ENGINES),
+    }
+    if duration is not None:
+        steps = (duration + solver["settle"]) / dt + 1
+        if steps > MAX_STEPS:
+            total = duration + solver["settle"]
+            raise slv.error(
+                "dt",
+                f"a step giving at most {MAX_STEPS:.0e} steps over trajectory.duration + "
+                f"solver.settle = {total:g} s (this one gives {steps:.3g})",
+                dt,
+            )
+    slv.done()
+    return solver
+
+
+def check_dt(slv: Table, dt: float, duration: float) -> None:
+    """Refuse a ``solver.dt`` that leaves fewer than ``MIN_SAMPLES`` samples in ``duration``."""
+    if duration > 0.0 and dt * MIN_SAMPLES > duration * (1.0 + 1e-12):
+        raise slv.error(
+            "dt",
+            f"a step of at most trajectory.duration / {MIN_SAMPLES} = "
+            f"{duration / MIN_SAMPLES:g} s (at least {MIN_SAMPLES} samples to track)",
+            dt,
+        )
 
 
 def _robot(rob: Table, folder: Path) -> dict[str, Any]:
@@ -195,7 +239,7 @@ def _robot(rob: Table, folder: Path) -> dict[str, Any]:
     robot = {
         "source": _resolve(folder, source) if looks_like_path else source,
         "package_dirs": [_resolve(folder, p) for p in _strings(rob, "package_dirs")],
-        "lock": rob.mapping("lock", lambda t, k: float(t.number(k))),
+        "lock": rob.mapping("lock", lambda t, k: float(t.number(k, bound=MAX_JOINT_VALUE))),
         "xacro_args": rob.mapping("xacro_args", lambda t, k: t.string(k)),
     }
     if robot["xacro_args"] and not is_xacro(source):
@@ -217,31 +261,39 @@ def _trajectory(tr: Table, folder: Path, has_orientation: bool = True) -> dict[s
     kind = tr.string("kind", choices=TRAJECTORY_KINDS)
     scale = _angle_scale(tr)
     out: dict[str, Any] = {"kind": kind}
-    out["start"] = tr.vector("start", 3, None, "[m]")
+    out["start"] = tr.vector("start", 3, None, "[m]", MAX_LENGTH)
     if kind in ("line", "hold"):
-        out["goal"] = tr.vector("goal", 3, None if kind == "hold" else ..., "[m]")
+        out["goal"] = tr.vector("goal", 3, None if kind == "hold" else ..., "[m]", MAX_LENGTH)
         if out["goal"] is ...:
             raise tr.error("goal", "a list of 3 numbers [m]")
     if kind == "circle":
-        out["center"] = tr.vector("center", 3, unit="[m]")
-        out["normal"] = tr.vector("normal", 3, [0.0, 0.0, 1.0])
+        out["center"] = tr.vector("center", 3, unit="[m]", bound=MAX_LENGTH)
+        out["normal"] = tr.vector("normal", 3, [0.0, 0.0, 1.0], bound=SCALE_RANGE[1])
         if np.linalg.norm(out["normal"]) == 0.0:
             raise tr.error("normal", "a non-zero vector", out["normal"])
-        angle = tr.number("angle", None)
+        angle = tr.number("angle", None, bound=MAX_ANGLE / scale)
         out["angle"] = 2.0 * math.pi if angle is None else angle * scale
         if out["angle"] == 0.0:
             raise tr.error("angle", "a non-zero angle", angle)
     if kind == "waypoints":
-        out["points"] = tr.matrix("points", 3, unit="[m]")
-        out["blend_radius"] = tr.number("blend_radius", 0.0, minimum=0.0, unit="[m]")
-    out["duration"] = tr.number("duration", None, minimum=0.0, strict=kind != "hold", unit="[s]")
-    if kind != "hold":
-        out["cruise_speed"] = tr.number("cruise_speed", None, minimum=0.0, strict=True)
+        out["points"] = tr.matrix("points", 3, unit="[m]", bound=MAX_LENGTH)
+        out["blend_radius"] = tr.number(
+            "blend_radius", 0.0, minimum=0.0, unit="[m]", bound=MAX_LENGTH
+        )
+    if kind == "hold":
+        out["duration"] = tr.number("duration", None, minimum=0.0, unit="[s]")
+    else:
+        out["duration"] = tr.number("duration", None, minimum=0.0, strict=True, unit="[s]")
+        if out["duration"] is not None and out["duration"] < MIN_DURATION:
+            raise tr.error("duration", f"a number >= {MIN_DURATION:g} [s]", out["duration"])
+        out["cruise_speed"] = tr.number(
+            "cruise_speed", None, minimum=0.0, strict=True, unit="[m/s]", bound=MAX_SPEED
+        )
     if kind == "hold" and out["duration"] is None:
         raise tr.error("duration", "a number >= 0 [s]")
     if kind != "hold" and out["duration"] is None and out.get("cruise_speed") is None:
         raise tr.error("duration", "a duration [s] or a cruise_speed")
-    rpy = tr.vector("goal_rpy", 3, None)
+    rpy = tr.vector("goal_rpy", 3, None, bound=MAX_ANGLE / scale)
     if rpy is not None and not has_orientation:
         raise tr.error("goal_rpy", "no goal_rpy: the task has no orientation rows", rpy)
     out["goal_rpy"] = None if rpy is None else [v * scale for v in rpy]
@@ -254,38 +306,50 @@ def _obstacle(ob: Table, folder: Path) -> dict[str, Any]:
     out: dict[str, Any] = {
         "name": ob.string("name"),
         "shape": shape,
-        "position": ob.vector("position", 3, unit="[m]"),
+        "position": ob.vector("position", 3, unit="[m]", bound=MAX_LENGTH),
     }
     scale = _angle_scale(ob)
-    rpy = ob.vector("rpy", 3, [0.0, 0.0, 0.0])
+    rpy = ob.vector("rpy", 3, [0.0, 0.0, 0.0], bound=MAX_ANGLE / scale)
     out["rpy"] = [v * scale for v in rpy]
-    out["velocity"] = ob.vector("velocity", 3, [0.0, 0.0, 0.0], "[m/s]")
-    out["threshold"] = ob.number("threshold", None, minimum=0.0, strict=True, unit="[m]")
+    out["velocity"] = ob.vector("velocity", 3, [0.0, 0.0, 0.0], "[m/s]", MAX_SPEED)
+    out["threshold"] = _length(ob, "threshold", None, strict=True)
     if shape == "sphere":
-        out["radius"] = ob.number("radius", minimum=0.0, unit="[m]")
+        out["radius"] = _length(ob, "radius")
     elif shape == "box":
-        size = ob.vector("size", 3, unit="[m]")
+        size = ob.vector("size", 3, unit="[m]", bound=MAX_LENGTH)
         if any(s <= 0 for s in size):
             raise ob.error("size", "three positive side lengths [m]", size)
         out["size"] = size
     elif shape in ("capsule", "cylinder"):
-        out["radius"] = ob.number("radius", minimum=0.0, strict=shape == "cylinder", unit="[m]")
-        out["length"] = ob.number("length", minimum=0.0, strict=shape == "cylinder", unit="[m]")
+        out["radius"] = _length(ob, "radius", strict=shape == "cylinder")
+        out["length"] = _length(ob, "length", strict=shape == "cylinder")
     else:
         file = ob.string("file")
         out["file"] = _resolve(Path(ob.file).parent, file)
         out["scale"] = ob.vector("scale", 3, [1.0, 1.0, 1.0])
+        low, high = SCALE_RANGE
+        if any(not low <= abs(v) <= high for v in out["scale"]):
+            raise ob.error("scale", f"three scale factors of magnitude in [{low:g}, {high:g}]",
+                           out["scale"])  # fmt: skip
     ob.done()
     return out
 
 
-def _constraints(ct: Table) -> dict[str, Any]:
+def _length(table: Table, name: str, default: Any = ..., strict: bool = False) -> Any:
+    """A length [m] in ``[0, MAX_LENGTH]`` (``> 0`` when ``strict``); ``...``: required."""
+    if default is ...:
+        return table.number(name, minimum=0.0, strict=strict, unit="[m]", bound=MAX_LENGTH)
+    return table.number(name, default, minimum=0.0, strict=strict, unit="[m]", bound=MAX_LENGTH)
+
+
+def _constraints(ct: Table, dt: float) -> dict[str, Any]:
+    """The ``[constraints]`` table; ``dt`` [s] bounds the rows' gains (``gain * dt``)."""
     out: dict[str, Any] = {}
     obs = ct.table("obstacles")
     out["obstacles"] = {
         "enabled": obs.boolean("enabled", False),
-        "threshold": obs.number("threshold", 0.03, minimum=0.0, strict=True, unit="[m]"),
-        "gain": obs.number("gain", None, minimum=0.0, strict=True, unit="[1/s]"),
+        "threshold": _length(obs, "threshold", 0.03, strict=True),
+        "gain": _scalar_gain(obs, dt),
         "form": obs.string("form", "normalized", ("normalized", "squared")),
         "release": obs.string("release", None, ("projection", "sign")),
         "links": _strings(obs, "links") or None,
@@ -298,7 +362,7 @@ def _constraints(ct: Table) -> dict[str, Any]:
     ov = jl.table("override")
     for joint in list(ov.data):
         sub = ov.table(joint)
-        lim = {k: sub.number(k, None) for k in ("lower", "upper")}
+        lim = {k: sub.number(k, None, bound=MAX_JOINT_VALUE / scale) for k in ("lower", "upper")}
         sub.done()
         written[joint] = {k: float(v) for k, v in lim.items() if v is not None}
     out["joint_limits"] = {
@@ -309,6 +373,7 @@ def _constraints(ct: Table) -> dict[str, Any]:
             minimum=0.0,
             strict=True,
             unit=f"[{unit}] (revolute joints)",
+            bound=MAX_ANGLE / scale,
         )
         * scale,
         "prismatic_threshold": float(
@@ -318,9 +383,10 @@ def _constraints(ct: Table) -> dict[str, Any]:
                 minimum=0.0,
                 strict=True,
                 unit="[m] (prismatic joints)",
+                bound=MAX_LENGTH,
             )
         ),
-        "gain": jl.number("gain", None, minimum=0.0, strict=True, unit="[1/s]"),
+        "gain": _scalar_gain(jl, dt),
         "override": {j: {k: v * scale for k, v in lim.items()} for j, lim in written.items()},
         "override_as_written": written,
         "unit": unit,
@@ -329,20 +395,28 @@ def _constraints(ct: Table) -> dict[str, Any]:
     sc = ct.table("self_collision")
     out["self_collision"] = {
         "enabled": sc.boolean("enabled", False),
-        "threshold": sc.number("threshold", 0.01, minimum=0.0, strict=True, unit="[m]"),
-        "gain": sc.number("gain", None, minimum=0.0, strict=True, unit="[1/s]"),
+        "threshold": _length(sc, "threshold", 0.01, strict=True),
+        "gain": _scalar_gain(sc, dt),
     }
     sc.done()
-    out["dexterity"] = _dexterity(ct.table("dexterity"))
+    out["dexterity"] = _dexterity(ct.table("dexterity"), dt)
     out["velocity_limits"] = _velocity_limits(ct.table("velocity_limits"))
     out["release"] = ct.string("release", "projection", ("projection", "sign"))
-    out["hysteresis"] = ct.number("hysteresis", 0.0, minimum=0.0)
-    out["max_active"] = ct.number("max_active", None, minimum=0, integer=True)
+    out["hysteresis"] = ct.number("hysteresis", 0.0, minimum=0.0, bound=MAX_LENGTH)
+    out["max_active"] = ct.number("max_active", None, minimum=1, integer=True)
     ct.done()
     return out
 
 
-def _dexterity(dx: Table) -> dict[str, Any]:
+def _scalar_gain(table: Table, dt: float) -> Any:
+    """A constraint row's optional ``gain`` [1/s] (> 0, ``gain * dt <= MAX_GAIN_DT``)."""
+    value = table.raw("gain", None)
+    if isinstance(value, list):
+        raise table.error("gain", "a number > 0 [1/s]", value)
+    return _gain(table, "gain", dt)
+
+
+def _dexterity(dx: Table, dt: float) -> dict[str, Any]:
     """``[constraints.dexterity]``: keep the task's manipulability ``w >= threshold`` (D1)-(D3).
 
     Keys: ``enabled`` (default false), ``threshold`` (``w_min`` > 0 [m^p], required when
@@ -357,7 +431,7 @@ def _dexterity(dx: Table) -> dict[str, Any]:
     out = {
         "enabled": enabled,
         "threshold": None if threshold is None else float(threshold),
-        "gain": dx.number("gain", None, minimum=0.0, strict=True, unit="[1/s]"),
+        "gain": _scalar_gain(dx, dt),
     }
     dx.done()
     return out

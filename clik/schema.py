@@ -19,6 +19,26 @@ _MISSING = object()
 _SHOWN = 200
 """Longest shown value in a message, in characters (longer ones are cut)."""
 
+# Physical ranges of scenario numbers (README, "Ranges"): a number beyond its range is a
+# typo or a probe, refused naming its key before anything is computed.
+MAX_LENGTH = 1000.0
+"""Largest position coordinate, size, distance or threshold [m] (1 km)."""
+MAX_SPEED = 1000.0
+"""Largest obstacle velocity component or cruise speed [m/s]."""
+MAX_ANGLE = 8.0 * math.pi
+"""Largest angle magnitude [rad] (four turns): circle arcs, rpy angles, thresholds."""
+MAX_JOINT_VALUE = 1000.0
+"""Largest joint value magnitude [rad or m] (initial.q, robot.lock, overrides)."""
+SCALE_RANGE = (1e-6, 1e6)
+"""Smallest and largest mesh scale factor."""
+MAX_GAIN_DT = 1e4
+"""Largest ``gain * dt`` (any gain [1/s] times ``solver.dt`` [s]): law (10) is stable only
+below 2, laws (9) and (8) below ``2 / lambda_max(J J^T)``; beyond this no robot tracks."""
+MIN_DURATION = 1e-6
+"""Shortest trajectory duration [s] (a hold may last 0 s)."""
+MIN_SAMPLES = 2
+"""Fewest samples a trajectory must span: ``solver.dt <= duration / (MIN_SAMPLES)``."""
+
 
 def _finite(value: int | float) -> bool:
     """``math.isfinite`` that says no, not OverflowError, to a huge TOML integer."""
@@ -112,8 +132,9 @@ class Table:
         strict: bool = False,
         unit: str = "",
         integer: bool = False,
+        bound: float | None = None,
     ) -> Any:
-        """A finite number, ``>= minimum`` (``> minimum`` when ``strict``)."""
+        """A finite number, ``>= minimum`` (``> minimum`` when ``strict``), ``|x| <= bound``."""
         value = self.raw(name, default)
         if value is default and default is not _MISSING:
             return value
@@ -127,12 +148,19 @@ class Table:
             raise self.error(name, kind, value)
         if minimum is not None and (value <= minimum if strict else value < minimum):
             raise self.error(name, kind, value)
+        if bound is not None and abs(value) > bound:
+            raise self.error(name, f"{kind} of magnitude at most {bound:g}", value)
         return value
 
     def vector(
-        self, name: str, size: int | None = None, default: Any = _MISSING, unit: str = ""
+        self,
+        name: str,
+        size: int | None = None,
+        default: Any = _MISSING,
+        unit: str = "",
+        bound: float | None = None,
     ) -> Any:
-        """A list of finite numbers (of length ``size`` when given)."""
+        """A list of finite numbers (of length ``size`` when given), each ``|x| <= bound``."""
         value = self.raw(name, default)
         if value is default and default is not _MISSING:
             return value
@@ -143,9 +171,18 @@ class Table:
             isinstance(v, int | float) and not isinstance(v, bool) and _finite(v) for v in value
         ):
             raise self.error(name, expected + " (finite)", value)
+        if bound is not None and any(abs(v) > bound for v in value):
+            raise self.error(name, f"{expected} of magnitude at most {bound:g}", value)
         return [float(v) for v in value]
 
-    def matrix(self, name: str, columns: int, default: Any = _MISSING, unit: str = "") -> Any:
+    def matrix(
+        self,
+        name: str,
+        columns: int,
+        default: Any = _MISSING,
+        unit: str = "",
+        bound: float | None = None,
+    ) -> Any:
         """A list of lists of ``columns`` finite numbers."""
         value = self.raw(name, default)
         if value is default and default is not _MISSING:
@@ -156,7 +193,7 @@ class Table:
         out = []
         for i, row in enumerate(value):
             sub = Table({"row": row}, self.file, f"{self.key(name)}[{i}]")
-            out.append(sub.vector("row", columns, unit=unit))
+            out.append(sub.vector("row", columns, unit=unit, bound=bound))
         return out
 
     def mapping(self, name: str, check: Callable[[Table, str], Any]) -> dict[str, Any]:

@@ -8,11 +8,23 @@ entities, "billion laughs") or points at an external DTD, then checks that the
 description is a well-formed kinematic tree whose numbers are finite and whose
 mesh files exist. Each problem raises :class:`~clik.errors.RobotLoadError` with
 the problem in plain words and, when known, its line.
+
+Budgets keep every check fast (each is linear in the number of elements, up
+to a sort): a file of at most :data:`MAX_URDF_BYTES`, :data:`MAX_ELEMENTS`
+elements and :data:`MAX_ATTRIBUTES` attributes per element, counted on the raw
+bytes before the XML parser runs; at most :data:`MAX_LINKS` links and joints,
+:data:`MAX_MOVABLE_JOINTS` movable joints, and names of at most
+:data:`MAX_NAME_LENGTH` characters. Numbers must lie in physical ranges (:data:`RANGES`): positions
+and sizes within :data:`~clik.mesh_check.MAX_COORDINATE` [m], angles within
+:data:`MAX_ANGLE` [rad], masses within :data:`MAX_MASS` [kg]. Mesh files are
+checked by :func:`clik.mesh_check.check_mesh_file` (regular file, format,
+size, counts, symlinks and side files that stay inside their package).
 """
 
 from __future__ import annotations
 
 import math
+import os
 import posixpath
 import re
 from collections.abc import Callable, Sequence
@@ -21,6 +33,13 @@ from pathlib import Path
 from lxml import etree
 
 from clik.errors import RobotLoadError
+from clik.mesh_check import (
+    MAX_COORDINATE,
+    MeshRefused,
+    check_mesh_file,
+    check_scale,
+    regular_file_problem,
+)
 
 MOVABLE_TYPES = ("revolute", "continuous", "prismatic")
 """Joint types that add a degree of freedom to a fixed-base arm."""
@@ -30,9 +49,60 @@ JOINT_TYPES = (*MOVABLE_TYPES, "fixed", "floating", "planar")
 Fail = Callable[..., RobotLoadError]
 """Builds the error for a problem found at an element: ``fail(problem, element)``."""
 
+MAX_URDF_BYTES = 64 * 2**20
+"""Largest URDF (or SRDF, or xacro expansion) read [bytes]."""
+
+MAX_ELEMENTS = 500_000
+"""Most elements (counted as ``<`` signs: tags, comments) in a URDF."""
+
+MAX_ATTRIBUTES = 100
+"""Most attributes on one element (the XML parser's duplicate check is quadratic)."""
+
+MAX_LINKS = 2000
+"""Most links (and joints) in a URDF: Pinocchio's URDF reader recurses along the
+tree and crashes (stack overflow) on chains of a few thousand links."""
+
+MAX_MOVABLE_JOINTS = 128
+"""Most movable joints: Pinocchio's ``Data`` grows as ``nv^3`` (250 joints: 1 GB, 500: 8 GB)."""
+
+MAX_NAME_LENGTH = 1000
+"""Longest link or joint name [characters]."""
+
+MAX_ANGLE = 4 * math.pi
+"""Largest absolute angle in an origin's ``rpy`` [rad] (two turns)."""
+
+MAX_MASS = 1e6
+"""Largest mass [kg] and largest inertia entry [kg m^2]."""
+
+MAX_LIMIT = 1e16
+"""Largest absolute joint limit (position [rad or m], effort, velocity), dynamics value
+(damping, friction) and mesh scale factor: 1e16 is the URDF convention for "no limit"."""
+
+RANGES = {
+    "position": MAX_COORDINATE,
+    "angle": MAX_ANGLE,
+    "mass": MAX_MASS,
+    "limit": MAX_LIMIT,
+    "scale": math.inf,  # each factor's magnitude in clik.mesh_check.SCALE_RANGE
+}
+"""Largest absolute value of each kind of URDF number."""
+
+_BUDGETS = {
+    "MAX_URDF_BYTES": (MAX_URDF_BYTES, "bytes"),
+    "MAX_ELEMENTS": (MAX_ELEMENTS, "elements"),
+    "MAX_ATTRIBUTES": (MAX_ATTRIBUTES, "attributes"),
+    "MAX_NAME_LENGTH": (MAX_NAME_LENGTH, "characters"),
+    "MAX_LINKS": (MAX_LINKS, "links or joints"),
+    "MAX_MOVABLE_JOINTS": (MAX_MOVABLE_JOINTS, "movable joints"),
+}
+
+SHOWN_NAME = 60
+"""Characters of a long name shown in messages."""
+
 _ENTITY = re.compile(rb"<!ENTITY")
 _XINCLUDE = "{http://www.w3.org/2001/XInclude}"
 _DOCTYPE = re.compile(rb"<!DOCTYPE\s+[^\s\[>]+\s*([^\[>]*)")
+_ATTRIBUTE = re.compile(rb"=\s*[\"']")
 
 
 def parse_xml(path: str | Path, data: bytes | None = None) -> etree._ElementTree:
@@ -60,12 +130,17 @@ def parse_xml(path: str | Path, data: bytes | None = None) -> etree._ElementTree
     """
     path = Path(path)
     if data is None:
-        if not path.is_file():
-            problem = "is a folder, not a file" if path.is_dir() else "file not found"
-            raise RobotLoadError(path, problem)
+        problem = regular_file_problem(path)
+        if problem is not None:
+            missing = problem == "no such file"
+            raise RobotLoadError(path, "file not found" if missing else problem)
+        size = path.stat().st_size
+        if size > MAX_URDF_BYTES:
+            raise RobotLoadError(path, _over_budget(f"{size} bytes", "MAX_URDF_BYTES"))
         data = path.read_bytes()
     if not data.strip():
         raise RobotLoadError(path, "file is empty")
+    _check_budgets(path, data)
     entity = _ENTITY.search(data)
     if entity:
         raise RobotLoadError(
@@ -101,21 +176,64 @@ def parse_xml(path: str | Path, data: bytes | None = None) -> etree._ElementTree
     return tree
 
 
+def _line_of(data: bytes, offset: int) -> int:
+    return data.count(b"\n", 0, offset) + 1
+
+
+def _over_budget(found: str, name: str) -> str:
+    """The problem "``found``, above the budget ``name``" (a constant of this module)."""
+    budget = _BUDGETS[name]
+    return f"{found}, above the budget of {budget[0]} {budget[1]} (clik.urdf_check.{name})"
+
+
+def _check_budgets(path: Path, data: bytes) -> None:
+    """Refuse a file over the size, element or attribute budget, on its raw bytes.
+
+    Runs before the XML parser: libxml2 compares each attribute of an element
+    with the ones before it, so 20,000 attributes take seconds.
+    """
+    if len(data) > MAX_URDF_BYTES:
+        raise RobotLoadError(path, _over_budget(f"{len(data)} bytes", "MAX_URDF_BYTES"))
+    elements = data.count(b"<")
+    if elements > MAX_ELEMENTS:
+        raise RobotLoadError(path, _over_budget(f"{elements} elements", "MAX_ELEMENTS"))
+    offset = 0
+    for chunk in data.split(b"<"):  # one chunk per tag (with the text after it)
+        if chunk.count(b"=") > MAX_ATTRIBUTES:
+            attributes = len(_ATTRIBUTE.findall(chunk.split(b">", 1)[0]))
+            if attributes > MAX_ATTRIBUTES:
+                problem = _over_budget(f"an element has {attributes} attributes", "MAX_ATTRIBUTES")
+                raise RobotLoadError(path, problem, _line_of(data, offset))
+        offset += len(chunk) + 1
+
+
+def shown(name: str) -> str:
+    """A name as messages show it: quoted, cut to :data:`SHOWN_NAME` characters when long."""
+    if len(name) <= SHOWN_NAME:
+        return repr(name)
+    return f"{name[:SHOWN_NAME]!r}... ({len(name)} characters)"
+
+
 def check_urdf(
     path: str | Path, package_dirs: Sequence[str | Path] = (), text: str | None = None
 ) -> etree._Element:
     """Check that a URDF file describes a valid kinematic tree.
 
-    Checks, in order: strict XML (see :func:`parse_xml`); a ``<robot>`` root;
-    named, unique links and joints; known joint types; parent and child links
-    that exist; a tree (no cycle, a single root link, each link the child of at
-    most one joint); at least one movable joint; finite numbers in origins, axes,
-    limits and geometry; ``lower <= upper`` for revolute and prismatic joints;
-    no negative effort or velocity limit, mass or primitive size (box, cylinder,
-    sphere; a zero radius is allowed: planar arms use segments); mesh files that
-    exist, where ``package://pkg/rest`` is looked up as ``<dir>/pkg/rest`` for
-    each ``dir`` in ``package_dirs`` and must not leave the ``pkg`` folder, and a
-    relative filename is relative to the URDF's folder.
+    Checks, in order: strict XML within the budgets (see :func:`parse_xml`); a
+    ``<robot>`` root; named, unique links and joints (names of at most
+    :data:`MAX_NAME_LENGTH` characters); known joint types; parent and child
+    links that exist; a tree (no cycle, a single root link, each link the child
+    of at most one joint); at least one movable joint; numbers in origins, axes,
+    limits, dynamics, inertials and geometry that are finite and in their range
+    (:data:`RANGES`); ``lower <= upper`` for revolute and prismatic joints; no
+    negative effort or velocity limit, mass or primitive size (box, cylinder,
+    sphere; a zero radius is allowed: planar arms use segments); mesh scales in
+    :data:`~clik.mesh_check.SCALE_RANGE`; mesh files that pass
+    :func:`~clik.mesh_check.check_mesh_file`, where ``package://pkg/rest`` is
+    looked up as ``<dir>/pkg/rest`` for each ``dir`` in ``package_dirs`` and must
+    not leave the ``pkg`` folder (symlinks and OBJ ``mtllib`` files included),
+    and a relative filename is relative to the URDF's folder (a symlink must not
+    lead out of the folder its path names).
 
     Args:
         path: The URDF file.
@@ -140,39 +258,20 @@ def check_urdf(
         return RobotLoadError(source, problem, line=line)
 
     if root.tag != "robot":
-        raise fail(f"the root element is <{root.tag}>, expected <robot>", root)
+        raise fail(f"the root element is <{str(root.tag)[:SHOWN_NAME]}>, expected <robot>", root)
     links = _named(root, "link", fail)
     joints = _named(root, "joint", fail)
     if not links:
         raise fail("the robot has no <link>", root)
-
-    parent_of: dict[str, str] = {}  # child link -> parent link
-    joint_of: dict[str, str] = {}  # child link -> joint name
-    for name, joint in joints.items():
-        kind = joint.get("type")
-        if kind not in JOINT_TYPES:
-            raise fail(
-                f"joint {name!r} has type {kind!r}; known types: {', '.join(JOINT_TYPES)}", joint
-            )
-        ends = {}
-        for end in ("parent", "child"):
-            element = joint.find(end)
-            link = None if element is None else element.get("link")
-            if link is None:
-                raise fail(f"joint {name!r} has no <{end} link=...>", joint)
-            if link not in links:
-                raise fail(f"joint {name!r} names {end} link {link!r} that does not exist", element)
-            ends[end] = link
-        child = ends["child"]
-        if child in joint_of:
-            raise fail(
-                f"link {child!r} is the child of two joints ({joint_of[child]!r} and {name!r}): "
-                "the joints do not form a tree",
-                joint,
-            )
-        parent_of[child], joint_of[child] = ends["parent"], name
-        _check_joint_numbers(name, joint, fail)
-
+    if max(len(links), len(joints)) > MAX_LINKS:
+        found = f"the robot has {len(links)} links and {len(joints)} joints"
+        raise fail(_over_budget(found, "MAX_LINKS"), root)
+    movable = sum(joint.get("type") in MOVABLE_TYPES for joint in joints.values())
+    if movable > MAX_MOVABLE_JOINTS:
+        raise fail(
+            _over_budget(f"the robot has {movable} movable joints", "MAX_MOVABLE_JOINTS"), root
+        )
+    parent_of = _joint_ends(links, joints, fail)
     _check_tree(links, parent_of, fail)
     if not any(joint.get("type") in MOVABLE_TYPES for joint in joints.values()):
         raise fail("the robot has no movable (revolute, continuous or prismatic) joint", root)
@@ -181,8 +280,42 @@ def check_urdf(
     return root
 
 
-def _line_of(data: bytes, offset: int) -> int:
-    return data.count(b"\n", 0, offset) + 1
+def _joint_ends(
+    links: dict[str, etree._Element], joints: dict[str, etree._Element], fail: Fail
+) -> dict[str, str]:
+    """Child link -> parent link, checking each joint's type, ends and numbers."""
+    parent_of: dict[str, str] = {}  # child link -> parent link
+    joint_of: dict[str, str] = {}  # child link -> joint name
+    for name, joint in joints.items():
+        kind = joint.get("type")
+        if kind not in JOINT_TYPES:
+            raise fail(
+                f"joint {shown(name)} has type {shown(str(kind))}; "
+                f"known types: {', '.join(JOINT_TYPES)}",
+                joint,
+            )
+        ends = {}
+        for end in ("parent", "child"):
+            element = joint.find(end)
+            link = None if element is None else element.get("link")
+            if link is None:
+                raise fail(f"joint {shown(name)} has no <{end} link=...>", joint)
+            if link not in links:
+                raise fail(
+                    f"joint {shown(name)} names {end} link {shown(link)} that does not exist",
+                    element,
+                )
+            ends[end] = link
+        child = ends["child"]
+        if child in joint_of:
+            raise fail(
+                f"link {shown(child)} is the child of two joints ({shown(joint_of[child])} and "
+                f"{shown(name)}): the joints do not form a tree",
+                joint,
+            )
+        parent_of[child], joint_of[child] = ends["parent"], name
+        _check_joint_numbers(name, joint, fail)
+    return parent_of
 
 
 def _named(root: etree._Element, tag: str, fail: Fail) -> dict[str, etree._Element]:
@@ -192,9 +325,12 @@ def _named(root: etree._Element, tag: str, fail: Fail) -> dict[str, etree._Eleme
         name = element.get("name")
         if not name:
             raise fail(f"a <{tag}> has no name", element)
+        if len(name) > MAX_NAME_LENGTH:
+            found = f"{tag} name {shown(name)} is too long"
+            raise fail(_over_budget(found, "MAX_NAME_LENGTH"), element)
         if name in named:
             raise fail(
-                f"{tag} name {name!r} appears twice (lines {named[name].sourceline} "
+                f"{tag} name {shown(name)} appears twice (lines {named[name].sourceline} "
                 f"and {element.sourceline})",
                 element,
             )
@@ -203,26 +339,40 @@ def _named(root: etree._Element, tag: str, fail: Fail) -> dict[str, etree._Eleme
 
 
 def _check_tree(links: dict[str, etree._Element], parent_of: dict[str, str], fail: Fail) -> None:
-    """Refuse cycles and forests: exactly one link may lack a parent."""
+    """Refuse cycles and forests: exactly one link may lack a parent.
+
+    Each link is walked up to once: a walk stops at a link already known to
+    reach the root, so the check is linear in the number of links.
+    """
+    reaches_root: set[str] = set()
     for start in parent_of:
-        seen = [start]
+        path: list[str] = []
+        on_path: set[str] = set()
         link = start
-        while link in parent_of:
-            link = parent_of[link]
-            if link in seen:
-                cycle = seen[seen.index(link) :]
+        while link in parent_of and link not in reaches_root:
+            if link in on_path:
+                cycle = path[path.index(link) :]
                 raise fail(
-                    "the joints form a cycle through links " + ", ".join(map(repr, cycle)),
+                    "the joints form a cycle through links "
+                    + ", ".join(map(shown, cycle[:20]))
+                    + (f", ... ({len(cycle)} links)" if len(cycle) > 20 else ""),
                     links[link],
                 )
-            seen.append(link)
+            path.append(link)
+            on_path.add(link)
+            link = parent_of[link]
+        reaches_root.update(path)
     roots = [name for name in links if name not in parent_of]
     if len(roots) > 1:
+        listed = ", ".join(map(shown, roots[:20])) + (", ..." if len(roots) > 20 else "")
         raise fail(
-            "the links do not form a single tree: several root links "
-            f"({', '.join(map(repr, roots))}); every link but one must be a joint's child",
+            f"the links do not form a single tree: several root links ({listed}); "
+            "every link but one must be a joint's child",
             links[roots[1]],
         )
+
+
+_UNITS = {"position": "m", "angle": "rad", "mass": "kg or kg m^2", "limit": "", "scale": ""}
 
 
 def _numbers(
@@ -231,33 +381,46 @@ def _numbers(
     count: int,
     what: str,
     fail: Fail,
+    kind: str = "position",
     nonnegative: bool = False,
 ) -> list[float]:
-    """Read ``count`` finite numbers from an attribute (each ``>= 0`` when ``nonnegative``)."""
+    """Read ``count`` finite numbers from an attribute, each within ``RANGES[kind]``.
+
+    Each must also be ``>= 0`` when ``nonnegative``.
+    """
     text = element.get(attribute)
     try:
         values = [float(word) for word in text.split()] if text is not None else []
     except ValueError:
         values = []
+    written = shown(str(text))
     if len(values) != count:
-        raise fail(f"{what} {attribute}={text!r} is not {count} number(s)", element)
+        raise fail(f"{what} {attribute}={written} is not {count} number(s)", element)
     if not all(math.isfinite(value) for value in values):
-        raise fail(f"{what} {attribute}={text!r} is not finite", element)
+        raise fail(f"{what} {attribute}={written} is not finite", element)
     if nonnegative and any(value < 0.0 for value in values):
-        raise fail(f"{what} {attribute}={text!r} is negative", element)
+        raise fail(f"{what} {attribute}={written} is negative", element)
+    bound = RANGES[kind]
+    if any(abs(value) > bound for value in values):
+        low = 0 if nonnegative else -bound
+        raise fail(
+            f"{what} {attribute}={written} is out of range: each value must be within "
+            f"[{low:g}, {bound:g}] {_UNITS[kind]}".rstrip(),
+            element,
+        )
     return values
 
 
 def _check_origin(parent: etree._Element, what: str, fail: Fail) -> None:
     origin = parent.find("origin")
     if origin is not None:
-        for attribute in ("xyz", "rpy"):
+        for attribute, kind in (("xyz", "position"), ("rpy", "angle")):
             if origin.get(attribute) is not None:
-                _numbers(origin, attribute, 3, f"{what} origin", fail)
+                _numbers(origin, attribute, 3, f"{what} origin", fail, kind)
 
 
 def _check_joint_numbers(name: str, joint: etree._Element, fail: Fail) -> None:
-    what = f"joint {name!r}"
+    what = f"joint {shown(name)}"
     _check_origin(joint, what, fail)
     kind = joint.get("type")
     axis = joint.find("axis")
@@ -265,13 +428,19 @@ def _check_joint_numbers(name: str, joint: etree._Element, fail: Fail) -> None:
         direction = _numbers(axis, "xyz", 3, f"{what} axis", fail)
         if kind in MOVABLE_TYPES and not any(direction):
             raise fail(f"{what} has a zero axis", axis)
+    dynamics = joint.find("dynamics")
+    for attribute in ("damping", "friction"):
+        if dynamics is not None and dynamics.get(attribute) is not None:
+            _numbers(dynamics, attribute, 1, f"{what} dynamics", fail, "limit")
     limit = joint.find("limit")
     if limit is None:
         if kind in ("revolute", "prismatic"):
             raise fail(f"{what} is {kind} but has no <limit>", joint)
         return
     values = {  # effort and velocity are bounds on magnitudes: never negative
-        attribute: _numbers(limit, attribute, 1, f"{what} limit", fail, attribute in _MAGNITUDES)[0]
+        attribute: _numbers(
+            limit, attribute, 1, f"{what} limit", fail, "limit", attribute in _MAGNITUDES
+        )[0]
         for attribute in ("lower", "upper", *_MAGNITUDES)
         if limit.get(attribute) is not None
     }
@@ -289,48 +458,91 @@ _SHAPES = {"box": {"size": 3}, "cylinder": {"radius": 1, "length": 1}, "sphere":
 def _check_link(
     name: str, link: etree._Element, urdf: Path, package_dirs: Sequence[str | Path], fail: Fail
 ) -> None:
-    what = f"link {name!r}"
+    what = f"link {shown(name)}"
     inertial = link.find("inertial")
     if inertial is not None:
         _check_origin(inertial, f"{what} inertial", fail)
         mass = inertial.find("mass")
         if mass is not None:
-            _numbers(mass, "value", 1, f"{what} mass", fail, nonnegative=True)
+            _numbers(mass, "value", 1, f"{what} mass", fail, "mass", nonnegative=True)
         inertia = inertial.find("inertia")
         for attribute in () if inertia is None else inertia.attrib:
-            _numbers(inertia, attribute, 1, f"{what} inertia", fail)
+            _numbers(inertia, attribute, 1, f"{what} inertia", fail, "mass")
     for kind in ("visual", "collision"):
         for element in link.findall(kind):
             _check_origin(element, f"{what} {kind}", fail)
             for shape in element.iterfind("geometry/*"):
                 for attribute, count in _SHAPES.get(shape.tag, {}).items():
-                    _numbers(shape, attribute, count, f"{what} {kind} {shape.tag}", fail, True)
+                    _numbers(
+                        shape,
+                        attribute,
+                        count,
+                        f"{what} {kind} {shape.tag}",
+                        fail,
+                        "position",
+                        True,
+                    )
                 if shape.tag == "mesh":
-                    if shape.get("scale") is not None:
-                        _numbers(shape, "scale", 3, f"{what} {kind} mesh", fail)
-                    _check_mesh(shape, urdf, package_dirs, fail)
+                    _check_mesh(shape, f"{what} {kind} mesh", urdf, package_dirs, fail)
 
 
 def _check_mesh(
-    mesh: etree._Element, urdf: Path, package_dirs: Sequence[str | Path], fail: Fail
+    mesh: etree._Element,
+    what: str,
+    urdf: Path,
+    package_dirs: Sequence[str | Path],
+    fail: Fail,
 ) -> None:
-    """A mesh file must exist; a ``package://`` one must stay inside its package."""
+    """A mesh file must pass the cheap mesh checks and stay inside its folder."""
+    scale = [1.0, 1.0, 1.0]
+    if mesh.get("scale") is not None:
+        scale = _numbers(mesh, "scale", 3, what, fail, "scale")  # range: check_scale
     filename = mesh.get("filename")
     if not filename:
         raise fail("a <mesh> has no filename", mesh)
+    file, root = _mesh_location(filename, mesh, urdf, package_dirs, fail)
+    try:
+        check_scale(scale, what)
+        facts = check_mesh_file(file, scale, root, what=f"{what} {shown(filename)}: file")
+        for side in facts.side_files:  # an OBJ's material files: inside the folder too
+            _check_side_file(facts.path.parent / side, root)
+    except MeshRefused as refused:
+        raise fail(str(refused), mesh) from None
+
+
+def _check_side_file(side: Path, root: Path) -> None:
+    """An OBJ ``mtllib`` file must stay inside ``root`` and, if it exists, be a regular file."""
+    if not side.resolve().is_relative_to(root.resolve()):
+        raise MeshRefused(f"its material file (mtllib) {side} leaves the folder {root}")
+    if os.path.lexists(side):
+        problem = regular_file_problem(side)
+        if problem is not None:
+            raise MeshRefused(f"its material file (mtllib) {side} {problem}")
+
+
+def _mesh_location(
+    filename: str,
+    mesh: etree._Element,
+    urdf: Path,
+    package_dirs: Sequence[str | Path],
+    fail: Fail,
+) -> tuple[Path, Path]:
+    """The mesh file a ``filename`` names and the folder it must stay inside."""
     if filename.startswith("package://"):
         # "package:///pkg/..." (extra slash) is read as "package://pkg/..." like Pinocchio does
         package, _, rest = filename.removeprefix("package://").lstrip("/").partition("/")
         inside = posixpath.normpath(rest or ".")
         if not package or package in (".", "..") or inside.startswith(("..", "/")):
-            raise fail(f"mesh {filename!r} leaves its package folder", mesh)
-        candidates = [Path(folder) / package / inside for folder in package_dirs]
-        if not any(candidate.is_file() for candidate in candidates):
-            searched = ", ".join(map(str, package_dirs)) or "none given"
-            raise fail(f"mesh file {filename!r} not found (package folders: {searched})", mesh)
-        return
+            raise fail(f"mesh {shown(filename)} leaves its package folder", mesh)
+        for folder in package_dirs:  # the first folder holding it, as Pinocchio looks
+            candidate = Path(folder) / package / inside
+            if os.path.lexists(candidate):
+                return candidate, Path(folder) / package
+        searched = ", ".join(map(str, package_dirs)) or "none given"
+        raise fail(f"mesh file {shown(filename)} not found (package folders: {searched})", mesh)
     if "://" in filename and not filename.startswith("file://"):
-        raise fail(f"mesh {filename!r} uses an unsupported URI scheme", mesh)
+        raise fail(f"mesh {shown(filename)} uses an unsupported URI scheme", mesh)
     file = urdf.parent / filename.removeprefix("file://")
-    if not file.is_file():
-        raise fail(f"mesh file {filename!r} not found (looked for {file})", mesh)
+    if not os.path.lexists(file):
+        raise fail(f"mesh file {shown(filename)} not found (looked for {file})", mesh)
+    return file, Path(os.path.normpath(file.absolute().parent))

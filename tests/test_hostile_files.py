@@ -372,7 +372,7 @@ def test_obstacle_mesh_with_an_external_entity_is_not_expanded(planted, capfd):
 
 def test_a_file_that_is_not_a_mesh_is_not_echoed(planted, capfd):
     """An obstacle mesh or a robot source pointing at any file: refused, content never shown."""
-    with pytest.raises(GeometryError, match="cannot read mesh"):
+    with pytest.raises(GeometryError, match=r"has format '\.txt'"):  # refused unread
         Obstacle("m", "mesh", [0.5, 0.0, 0.0], file=planted.secret)
     with pytest.raises(RobotLoadError, match="malformed XML") as caught:
         Robot.load(planted.secret)
@@ -493,3 +493,64 @@ def test_a_robot_url_is_refused_without_a_connection(tmp_path):
         assert listener.connections() == 0
     finally:
         listener.close()
+
+
+# ---------------------------------------------------------------- mesh side files and symlinks
+
+
+OBJ_TETRAHEDRON = "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+
+
+def test_an_obstacle_obj_is_read_without_its_material_file(planted, capfd):
+    """``mtllib`` pointing at the secret: the loader gets a copy without it, reads nothing else."""
+    mtl = os.path.relpath(planted.secret, planted.inputs)
+    mesh = planted.write("m.obj", f"mtllib {mtl}\nusemtl secret\n{OBJ_TETRAHEDRON}")
+    obstacle = Obstacle("m", "mesh", [0.5, 0.0, 0.0], file=mesh)
+    assert obstacle.bounding_radius == pytest.approx(0.1)
+    captured = capfd.readouterr()
+    planted.assert_no_leak(captured.out, captured.err)
+    planted.assert_untouched()
+
+
+def test_a_urdf_obj_naming_a_material_file_outside_its_package_is_refused(planted, capfd):
+    package = planted.inputs / "pkg"
+    package.mkdir()
+    mtl = os.path.relpath(planted.secret, package)
+    (package / "m.obj").write_text(f"mtllib {mtl}\n{OBJ_TETRAHEDRON}")
+    urdf = planted.write("r.urdf", with_mesh("package://pkg/m.obj"))
+    with pytest.raises(RobotLoadError, match="material file") as caught:
+        Robot.load(urdf, package_dirs=[planted.inputs])
+    assert "leaves the folder" in str(caught.value)
+    captured = capfd.readouterr()
+    planted.assert_no_leak(str(caught.value), captured.out, captured.err)
+    planted.assert_untouched()
+
+
+def test_mesh_symlinks_leaving_their_folder_are_refused(planted, capfd):
+    """A mesh in a package (or next to a scenario) that links to a file outside it."""
+    package = planted.inputs / "pkg"
+    package.mkdir()
+    (package / "m.stl").symlink_to(planted.secret)
+    (planted.inputs / "obstacle.stl").symlink_to(planted.secret)
+    urdf = planted.write("r.urdf", with_mesh("package://pkg/m.stl"))
+    with pytest.raises(RobotLoadError, match="which leaves its folder") as in_urdf:
+        Robot.load(urdf, package_dirs=[planted.inputs])
+    with pytest.raises(GeometryError, match="which leaves its folder") as in_scenario:
+        Obstacle("m", "mesh", [0.5, 0.0, 0.0], file=planted.inputs / "obstacle.stl")
+    captured = capfd.readouterr()
+    planted.assert_untouched()
+    (package / "m.stl").unlink()  # the leak check reads every file under the test folder
+    (planted.inputs / "obstacle.stl").unlink()
+    planted.assert_no_leak(str(in_urdf.value), str(in_scenario.value), captured.out, captured.err)
+
+
+def test_a_symlinked_mesh_inside_its_package_is_read(planted):
+    """The control: a symlink that stays inside the package is followed."""
+    package = planted.inputs / "pkg"
+    (package / "meshes").mkdir(parents=True)
+    (package / "meshes" / "real.obj").write_text(OBJ_TETRAHEDRON)
+    (package / "m.obj").symlink_to(package / "meshes" / "real.obj")
+    urdf = planted.write("r.urdf", with_mesh("package://pkg/m.obj"))
+    robot = Robot.load(urdf, package_dirs=[planted.inputs])
+    assert robot.collision_model.ngeoms == 1
+    planted.assert_untouched()

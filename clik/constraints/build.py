@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 from clik.constraints.constraint_set import ConstraintSet
@@ -9,6 +10,7 @@ from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits, convert_override
 from clik.constraints.obstacle import Obstacle
 from clik.errors import ClikError, GeometryError, InputError, JointNotFound, ScenarioError
+from clik.robot import PRISMATIC, REVOLUTE
 
 if TYPE_CHECKING:
     from clik.robot import Robot
@@ -47,6 +49,7 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
     obs, jl_spec, sc = c["obstacles"], c["joint_limits"], c["self_collision"]
     joint_limits = None
     if jl_spec["enabled"] or jl_spec["override"]:  # a bad override is an error even when off
+        _check_thresholds(scenario, robot, jl_spec)
         try:
             override = jl_spec["override"]
             if "override_as_written" in jl_spec:  # parse_scenario's; older dicts: radians
@@ -91,6 +94,35 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
         )
     except ClikError as exc:
         raise ScenarioError(scenario.file, "constraints", str(exc)) from None
+
+
+def _check_thresholds(scenario: Scenario, robot: Robot, spec: dict[str, Any]) -> None:
+    """Refuse a joint-range threshold no joint can use: at least half of every joint's range.
+
+    A threshold is capped at a quarter of each joint's range (:class:`JointLimits`); one as
+    large as half the widest range of its kind of joint would put every joint inside its
+    band at once: a typo, named by its key.
+    """
+    kinds = robot.joint_kinds
+    for kind, key, unit in (
+        (REVOLUTE, "threshold", "rad"),
+        (PRISMATIC, "prismatic_threshold", "m"),
+    ):
+        threshold = spec.get(key)
+        halves = [
+            (robot.upper[j.idx_q] - robot.lower[j.idx_q]) / 2.0
+            for name, j in zip(robot.joint_names, robot.model.joints[1:], strict=True)
+            if kinds[name] == kind
+        ]
+        halves = [h for h in halves if math.isfinite(h) and h > 0.0]
+        if threshold is None or not halves or threshold < max(halves):
+            continue
+        raise ScenarioError(
+            scenario.file,
+            f"constraints.joint_limits.{key}",
+            f"expected a threshold smaller than half of a {kind} joint's range (the widest "
+            f"half range of {robot.name} is {max(halves):.6g} {unit}), got {threshold:.6g} {unit}",
+        )
 
 
 def _dexterity(scenario: Scenario, spec: dict[str, Any]) -> Dexterity | None:

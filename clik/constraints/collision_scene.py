@@ -77,11 +77,17 @@ class CollisionScene:
         self._add_links(gmodel, links)
         self._warn_links_without_geometry()
         if self.n_links == 0 and obstacles:
+            names = ", ".join(repr(o.name) for o in obstacles)
+            skipped = (
+                f" (the hulls of {', '.join(self.skipped_geometries)} could not be built)"
+                if self.skipped_geometries
+                else ""
+            )
             raise GeometryError(
-                f"robot {robot.name}: no link has collision geometry "
-                f"{'among ' + str(list(links)) + ' ' if links is not None else ''}"
-                "to keep away from the obstacles; remove the obstacles or use a URDF "
-                "with <collision> elements"
+                f"robot {robot.name} has no collision geometry "
+                f"{'among the links ' + str(list(links)) + ' ' if links is not None else ''}"
+                f"to keep away from the obstacles {names}{skipped}; remove the obstacles or "
+                "use a URDF with <collision> elements"
             )
         self._bounding_spheres()
         self._add_obstacles(gmodel, obstacles)
@@ -124,7 +130,8 @@ class CollisionScene:
             except GeometryError as exc:  # one bad mesh must not disable the others
                 self.skipped_geometries.append(go.name)
                 warnings.warn(
-                    f"{exc}; this geometry is not checked against obstacles",
+                    f"{exc} (link {link!r}); this geometry is not checked against obstacles, "
+                    "the link's other geometries and the other links are",
                     SkippedGeometryWarning,
                     stacklevel=4,
                 )

@@ -7,6 +7,8 @@ replaced by its convex hull, computed once.
 
 from __future__ import annotations
 
+import os
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TypeVar
@@ -16,6 +18,14 @@ import numpy as np
 import pinocchio as pin
 
 from clik.errors import GeometryError, InputError, native_message
+from clik.mesh_check import (
+    SCALE_RANGE,
+    MeshRefused,
+    check_mesh_file,
+    check_scale,
+    sanitized_obj,
+    vertex_problem,
+)
 
 T = TypeVar("T")
 
@@ -59,8 +69,10 @@ class Obstacle:
         radius: Sphere, capsule or cylinder radius [m] (sphere radius 0 is a point).
         size: Box side lengths (3,) [m].
         length: Capsule or cylinder length along the local z axis [m].
-        file: Mesh file (any format coal reads: STL, DAE, OBJ); its convex hull is used.
-        scale: Mesh scale (3,).
+        file: Mesh file (STL, OBJ, DAE or PLY, see :mod:`clik.mesh_check` for the
+            budgets); its convex hull is used.
+        scale: Mesh scale (3,), each factor's magnitude within
+            :data:`~clik.mesh_check.SCALE_RANGE`.
 
     Attributes:
         geometry: The coal collision geometry (convex).
@@ -150,16 +162,40 @@ def _required(value: T | None, where: str, key: str) -> T:
 
 
 def _mesh_hull(file: object, scale: np.ndarray, where: str) -> tuple[coal.ConvexBase, float]:
-    """Convex hull of a mesh file, and its bounding radius about the mesh origin."""
+    """Convex hull of a mesh file, and its bounding radius about the mesh origin.
+
+    The cheap checks of :func:`clik.mesh_check.check_mesh_file` run first (a
+    regular file, a known format, within the size and count budgets, not a
+    symlink out of the folder its path names); an OBJ file is handed to the
+    loader as a copy without its ``mtllib``/``usemtl`` lines, in a private
+    temporary folder, so the loader reads no other file. The scaled vertices
+    must lie within :data:`~clik.mesh_check.MAX_COORDINATE` before the hull.
+    """
     path = Path(str(file))
-    if not path.is_file():
-        raise GeometryError(f"{where}.file: no such mesh file {path}")
     try:
-        mesh = coal.MeshLoader().load(str(path), scale)
-    except Exception as exc:  # coal/assimp raise plain RuntimeErrors
-        raise GeometryError(
-            f"{where}.file: cannot read mesh {path}: {native_message(exc)}"
-        ) from None
+        check_scale(scale, f"{where}.scale")
+    except MeshRefused:
+        low, high = SCALE_RANGE
+        expected = f"three scale factors of magnitude within [{low:g}, {high:g}]"
+        raise InputError(f"{where}.scale", expected, scale.tolist()) from None
+    try:
+        root = Path(os.path.normpath(path.absolute().parent))
+        facts = check_mesh_file(path, scale, root, what="mesh file")
+    except MeshRefused as refused:
+        raise GeometryError(f"{where}.file: {refused}") from None
+    with tempfile.TemporaryDirectory(prefix="clik-mesh-") as private:  # mode 0700
+        readable = facts.path
+        if facts.kind == ".obj":
+            readable = Path(private, "mesh.obj")
+            readable.write_bytes(sanitized_obj(facts.path.read_bytes()))
+        try:
+            mesh = coal.MeshLoader().load(str(readable), scale)
+        except Exception as exc:  # coal/assimp raise plain RuntimeErrors
+            message = native_message(exc).replace(str(readable), str(path))
+            raise GeometryError(f"{where}.file: cannot read mesh {path}: {message}") from None
+    problem = vertex_problem(np.asarray(mesh.vertices()))
+    if problem is not None:
+        raise GeometryError(f"{where}.file: {path}: {problem}")
     return convex_hull(mesh, f"{where}.file")
 
 

@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from clik.errors import ClikError, InputError, ScenarioError
+from clik.out_folder import output_lock
 from clik.sweep.progress import RunProgress
 from clik.sweep.spec import RunSpec, Sweep, load_sweep
 from clik.sweep.store import CSV, PARQUET, ResultStore, check_folder, read_statuses
@@ -277,6 +278,7 @@ def run_sweep(
     Raises:
         ScenarioError: The sweep file, or its first run's scenario, is invalid.
         SweepOutputExistsError: ``out`` holds something else and ``force`` is false.
+        OutputLockedError: Another clik run writes into ``out`` (see :mod:`clik.out_folder`).
     """
     if not isinstance(sweep, Sweep):
         sweep = load_sweep(sweep)
@@ -285,33 +287,33 @@ def run_sweep(
         check_first_run(sweep, sweep.runs)
     except ScenarioError as exc:
         raise ScenarioError(sweep.file, "base", f"the first run cannot be built: {exc}") from None
-    values = {v.path: [r.params[v.path] for r in sweep.runs] for v in sweep.vary}
+    with output_lock(out):  # one writer per folder (resumed in place, not replaced)
+        values = {v.path: [r.params[v.path] for r in sweep.runs] for v in sweep.vary}
 
-    def open_store() -> ResultStore:
-        return ResultStore.open(out, manifest(sweep), values, force=force, fmt=fmt)
+        def open_store() -> ResultStore:
+            return ResultStore.open(out, manifest(sweep), values, force=force, fmt=fmt)
 
-    # Resuming: read what is there first (no cluster for a finished sweep). Else check the
-    # folder, connect, and only then create it (a bad --scheduler leaves nothing behind).
-    store = open_store() if check_folder(out, sweep.fingerprint, force) else None
-    todo = [r for r in sweep.runs if store is None or r.run_id not in store.ids]
-    report = SweepReport(
-        out, out / (PARQUET if fmt != "csv" else CSV), len(sweep.runs), len(sweep.runs) - len(todo)
-    )
-    if store is not None and not todo:
-        store.compact()
-        report.results = store.path
+        # Resuming: read what is there first (no cluster for a finished sweep). Else check the
+        # folder, connect, and only then create it (a bad --scheduler leaves nothing behind).
+        store = open_store() if check_folder(out, sweep.fingerprint, force) else None
+        todo = [r for r in sweep.runs if store is None or r.run_id not in store.ids]
+        results = out / (PARQUET if fmt != "csv" else CSV)
+        report = SweepReport(out, results, len(sweep.runs), len(sweep.runs) - len(todo))
+        if store is not None and not todo:
+            store.compact()
+            report.results = store.path
+            report.all_statuses = read_statuses(out)
+            return report
+        bar = RunProgress(sweep.name, len(todo), enabled=progress)
+        with nullcontext(client) if client is not None else dask_client(workers, scheduler) as dask:
+            if store is None:
+                store = open_store()
+            report.results = store.path
+            _Session(dask, sweep, todo, store, report, bar, keep_trajectories, on_row).run()
+        if report.complete:
+            store.compact()
         report.all_statuses = read_statuses(out)
         return report
-    bar = RunProgress(sweep.name, len(todo), enabled=progress)
-    with nullcontext(client) if client is not None else dask_client(workers, scheduler) as dask:
-        if store is None:
-            store = open_store()
-        report.results = store.path
-        _Session(dask, sweep, todo, store, report, bar, keep_trajectories, on_row).run()
-    if report.complete:
-        store.compact()
-    report.all_statuses = read_statuses(out)
-    return report
 
 
 def batch_size(remaining: int, threads: int, run_seconds: float | None) -> int:
