@@ -58,7 +58,8 @@ def test_existing_output_needs_force(tmp_path, capsys):
     assert "exists already; pass --force" in capsys.readouterr().err
     assert not (out / "summary.json").exists()
     assert main(["solve", str(scenario), "--out", str(out), "--quiet", "--force"]) == 0
-    assert (out / "summary.json").exists() and (out / "keep.txt").read_text() == "mine"
+    # --force replaces the folder whole: no file of the earlier contents stays
+    assert (out / "summary.json").exists() and not (out / "keep.txt").exists()
 
 
 @pytest.mark.parametrize(

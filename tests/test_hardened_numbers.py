@@ -105,8 +105,8 @@ NUMBERS = [
     ),
     pytest.param(
         case("threshold = 2.0", "threshold = 1000.0"),
-        Exits(2, ("constraints.joint_limits.threshold", "smaller than half of a revolute")),
-        id="joint-threshold-beyond-half-range",
+        Exits(2, ("constraints.joint_limits.threshold", "smaller than a revolute joint's range")),
+        id="joint-threshold-beyond-the-range",
     ),
     pytest.param(
         case("dt = 0.001", "dt = 1e300"),

@@ -97,11 +97,11 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
 
 
 def _check_thresholds(scenario: Scenario, robot: Robot, spec: dict[str, Any]) -> None:
-    """Refuse a joint-range threshold no joint can use: at least half of every joint's range.
+    """Refuse a joint-range threshold no joint can use: at least every joint's whole range.
 
-    A threshold is capped at a quarter of each joint's range (:class:`JointLimits`); one as
-    large as half the widest range of its kind of joint would put every joint inside its
-    band at once: a typo, named by its key.
+    A threshold is capped at a quarter of each joint's range (:class:`JointLimits`), so a
+    somewhat large one still works; one as large as the widest range of its kind of joint
+    (``1e300``) is a typo, named by its key.
     """
     kinds = robot.joint_kinds
     for kind, key, unit in (
@@ -109,19 +109,19 @@ def _check_thresholds(scenario: Scenario, robot: Robot, spec: dict[str, Any]) ->
         (PRISMATIC, "prismatic_threshold", "m"),
     ):
         threshold = spec.get(key)
-        halves = [
-            (robot.upper[j.idx_q] - robot.lower[j.idx_q]) / 2.0
+        ranges = [
+            robot.upper[j.idx_q] - robot.lower[j.idx_q]
             for name, j in zip(robot.joint_names, robot.model.joints[1:], strict=True)
             if kinds[name] == kind
         ]
-        halves = [h for h in halves if math.isfinite(h) and h > 0.0]
-        if threshold is None or not halves or threshold < max(halves):
+        ranges = [h for h in ranges if math.isfinite(h) and h > 0.0]
+        if threshold is None or not ranges or threshold < max(ranges):
             continue
         raise ScenarioError(
             scenario.file,
             f"constraints.joint_limits.{key}",
-            f"expected a threshold smaller than half of a {kind} joint's range (the widest "
-            f"half range of {robot.name} is {max(halves):.6g} {unit}), got {threshold:.6g} {unit}",
+            f"expected a threshold smaller than a {kind} joint's range (the widest range "
+            f"of {robot.name} is {max(ranges):.6g} {unit}), got {threshold:.6g} {unit}",
         )
 
 
