@@ -28,13 +28,15 @@ from clik.errors import (
     InfeasibleError,
     InputError,
     JointNotFound,
+    OutputError,
     OutputExistsError,
+    OutputLockedError,
     RobotLoadError,
     ScenarioError,
     UnknownRobotError,
 )
 from clik.result import TrackingResult
-from clik.robot import MimicJointWarning, Robot
+from clik.robot import MimicJointWarning, ReferenceClippedWarning, Robot
 from clik.solve_mode import SolveResult, solve
 from clik.speed_limits import SpeedLimits
 from clik.task import Task
@@ -51,8 +53,11 @@ __all__ = [
     "InputError",
     "JointNotFound",
     "MimicJointWarning",
+    "OutputError",
     "OutputExistsError",
+    "OutputLockedError",
     "ReachWarning",
+    "ReferenceClippedWarning",
     "Robot",
     "RobotLoadError",
     "ScenarioError",

@@ -12,11 +12,23 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
+SHOWN_CHARACTERS = 200
+"""Characters of a long name or value shown in a message (the rest is counted)."""
+
+
+def _short(value: object) -> str:
+    """``repr(value)``, cut to :data:`SHOWN_CHARACTERS` with the full length said."""
+    text = repr(value)
+    if len(text) <= SHOWN_CHARACTERS:
+        return text
+    size = f"{len(value)} characters" if isinstance(value, str) else f"{len(text)} characters"
+    return f"{text[:SHOWN_CHARACTERS]}... ({size})"
+
 
 def _listing(names: Iterable[str], limit: int = 40) -> str:
     """Comma-separated list of names, shortened past ``limit`` entries."""
     names = list(names)
-    shown = ", ".join(repr(n) for n in names[:limit])
+    shown = ", ".join(_short(n) for n in names[:limit])
     if len(names) > limit:
         shown += f", ... ({len(names) - limit} more)"
     return shown
@@ -43,7 +55,7 @@ class InputError(ClikError, ValueError):
         self.got = got
         message = f"{field}: expected {expected}"
         if got is not None:
-            message += f", got {got!r}"
+            message += f", got {_short(got)}"
         super().__init__(message)
 
 
@@ -87,7 +99,9 @@ class FrameNotFound(ClikError, KeyError):
     def __init__(self, name: str, frames: Iterable[str]) -> None:
         self.name = name
         self.frames = list(frames)
-        super().__init__(f"frame {name!r} not found; available frames: {_listing(self.frames)}")
+        super().__init__(
+            f"frame {_short(name)} not found; available frames: {_listing(self.frames)}"
+        )
 
     def __str__(self) -> str:  # KeyError quotes its message otherwise
         return str(self.args[0])
@@ -104,7 +118,9 @@ class JointNotFound(ClikError, KeyError):
     def __init__(self, name: str, joints: Iterable[str]) -> None:
         self.name = name
         self.joints = list(joints)
-        super().__init__(f"joint {name!r} not found; available joints: {_listing(self.joints)}")
+        super().__init__(
+            f"joint {_short(name)} not found; available joints: {_listing(self.joints)}"
+        )
 
     def __str__(self) -> str:
         return str(self.args[0])

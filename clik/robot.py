@@ -69,6 +69,11 @@ UNITS = ("rad", "deg")
 """Units of revolute joint values a user may write (prismatic values are always metres)."""
 
 
+MAX_MIMIC = 1000.0
+"""Largest magnitude of a ``<mimic>`` multiplier and offset [rad or m] (a follower's value
+then stays finite along any chain of mimics within the joint-count budget)."""
+
+
 class ReferenceClippedWarning(UserWarning):
     """The robot's own reference configuration lay outside its limits and was clipped.
 
@@ -774,6 +779,13 @@ def _mimic_joints(root: etree._Element, urdf: Path) -> dict[str, Mimic]:
                 raise RobotLoadError(
                     urdf,
                     f"joint {name!r} has a <mimic> {attribute} {text!r}, expected a finite number",
+                    line=element.sourceline,
+                )
+            if abs(value) > MAX_MIMIC:
+                raise RobotLoadError(
+                    urdf,
+                    f"joint {name!r} has a <mimic> {attribute} {text!r}, expected a number of "
+                    f"magnitude at most {MAX_MIMIC:g}",
                     line=element.sourceline,
                 )
             numbers[attribute] = value

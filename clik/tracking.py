@@ -28,7 +28,7 @@ from clik.engine import ENGINES
 from clik.errors import InputError
 from clik.extended_task import ExtendedTask
 from clik.gains import row_gains, stability_margin
-from clik.laws import LawName, check_law, nonlinear, prioritized, transpose
+from clik.laws import LawName, check_law, finite, nonlinear, prioritized, transpose
 from clik.reach import reach_bound
 from clik.recording import Recorder
 from clik.reference_stream import REFERENCE_CHUNK, ReferenceChunks
@@ -465,6 +465,12 @@ class _Run:
             return status, reason
         n = len(self.monitor.records)
         crossed = f"{n} constraint limit(s) crossed, the worst: {worst.describe()}"
+        stuck = sorted(set(self.monitor.records) & crun.cset.immovable_pairs) if crun else []
+        if stuck:
+            crossed += (
+                f"; {', '.join(stuck)}: on a link no joint moves (the robot's fixed base), "
+                "so no motion can clear it"
+            )
         if status == "completed":
             return "violated", f"{crossed} (the trajectory was run to its end)"
         return status, f"{reason}; {crossed}"
@@ -525,7 +531,11 @@ class _Run:
         )
         if self.crun is None or r == m:
             return head + "; no constraint is active: the task is singular or out of reach"
-        wanted = np.linalg.pinv(ext.J[:m]).dot(residual)  # the joint motion the task asks for
+        wanted = (  # the joint motion the task asks for (an SVD only of finite numbers)
+            np.linalg.pinv(ext.J[:m]).dot(residual)
+            if finite(ext.J[:m], residual)
+            else np.zeros(ext.J.shape[1])
+        )
         blocking = []
         for s, c in enumerate(self.crun.active_rows()):
             row = ext.J[m + s]

@@ -13,7 +13,8 @@ Budgets keep every check fast (each is linear in the number of elements, up
 to a sort): a file of at most :data:`MAX_URDF_BYTES`, :data:`MAX_ELEMENTS`
 elements and :data:`MAX_ATTRIBUTES` attributes per element, counted on the raw
 bytes before the XML parser runs; at most :data:`MAX_LINKS` links and joints,
-:data:`MAX_MOVABLE_JOINTS` movable joints, and names of at most
+:data:`MAX_MOVABLE_JOINTS` movable joints, :data:`MAX_DEPTH` joints from the root
+to any link, and names of at most
 :data:`MAX_NAME_LENGTH` characters. Numbers must lie in physical ranges (:data:`RANGES`): positions
 and sizes within :data:`~clik.mesh_check.MAX_COORDINATE` [m], angles within
 :data:`MAX_ANGLE` [rad], masses within :data:`MAX_MASS` [kg]. Mesh files are
@@ -58,9 +59,12 @@ MAX_ELEMENTS = 500_000
 MAX_ATTRIBUTES = 100
 """Most attributes on one element (the XML parser's duplicate check is quadratic)."""
 
-MAX_LINKS = 2000
-"""Most links (and joints) in a URDF: Pinocchio's URDF reader recurses along the
-tree and crashes (stack overflow) on chains of a few thousand links."""
+MAX_LINKS = 20_000
+"""Most links (and joints) in a URDF (a wide tree of 10,000 loads in about 1 s)."""
+
+MAX_DEPTH = 1000
+"""Most joints between the root link and any link: Pinocchio's URDF reader recurses
+along the tree and crashes (stack overflow) on chains of about 4,000 links."""
 
 MAX_MOVABLE_JOINTS = 128
 """Most movable joints: Pinocchio's ``Data`` grows as ``nv^3`` (250 joints: 1 GB, 500: 8 GB)."""
@@ -94,6 +98,7 @@ _BUDGETS = {
     "MAX_NAME_LENGTH": (MAX_NAME_LENGTH, "characters"),
     "MAX_LINKS": (MAX_LINKS, "links or joints"),
     "MAX_MOVABLE_JOINTS": (MAX_MOVABLE_JOINTS, "movable joints"),
+    "MAX_DEPTH": (MAX_DEPTH, "joints from the root link"),
 }
 
 SHOWN_NAME = 60
@@ -339,11 +344,13 @@ def _named(root: etree._Element, tag: str, fail: Fail) -> dict[str, etree._Eleme
 
 
 def _check_tree(links: dict[str, etree._Element], parent_of: dict[str, str], fail: Fail) -> None:
-    """Refuse cycles and forests: exactly one link may lack a parent.
+    """Refuse cycles, forests and chains deeper than :data:`MAX_DEPTH`.
 
-    Each link is walked up to once: a walk stops at a link already known to
-    reach the root, so the check is linear in the number of links.
+    Exactly one link may lack a parent. Each link is walked up to once: a walk
+    stops at a link already known to reach the root (its depth known), so the
+    check is linear in the number of links.
     """
+    depth = {name: 0 for name in links if name not in parent_of}
     reaches_root: set[str] = set()
     for start in parent_of:
         path: list[str] = []
@@ -362,6 +369,12 @@ def _check_tree(links: dict[str, etree._Element], parent_of: dict[str, str], fai
             on_path.add(link)
             link = parent_of[link]
         reaches_root.update(path)
+        below = depth[link]  # the root or a link whose depth is known
+        for step, name in enumerate(reversed(path), start=1):
+            depth[name] = below + step
+        if below + len(path) > MAX_DEPTH:
+            found = f"link {shown(start)} is {below + len(path)} joints from the root link"
+            raise fail(_over_budget(found, "MAX_DEPTH"), links[start])
     roots = [name for name in links if name not in parent_of]
     if len(roots) > 1:
         listed = ", ".join(map(shown, roots[:20])) + (", ..." if len(roots) > 20 else "")

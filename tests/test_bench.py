@@ -278,3 +278,16 @@ def test_bench_imports_flow_one_way():
 
     for module in graph:
         visit(module, ())
+
+
+def test_an_out_that_cannot_be_a_folder_is_refused_before_the_bench(tmp_path, capsys):
+    """``--out afile/sub`` or a file: exit 2 naming the path, at once (no bench run)."""
+    from clik.cli import main
+
+    afile = tmp_path / "afile"
+    afile.write_text("mine")
+    assert main(["bench", "--quick", "--out", str(afile / "sub")]) == 2
+    assert f"cannot write output {afile / 'sub'}: {afile} is a file" in capsys.readouterr().err
+    assert main(["bench", "--quick", "--out", str(afile)]) == 2
+    assert "--out: expected a folder" in capsys.readouterr().err
+    assert afile.read_text() == "mine"

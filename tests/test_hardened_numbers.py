@@ -171,6 +171,11 @@ NUMBERS = [
         id="mesh-scale-tiny",
     ),
     pytest.param(
+        case('frame = "tip"', f'frame = "{"f" * 1_000_000}"'),
+        Exits(2, ("task.frame", "(1000000 characters) not found", "available frames: ")),
+        id="task-frame-megabyte",
+    ),
+    pytest.param(
         CASE,
         Exits(0, (), made=True),
         id="in-range-runs",
@@ -191,6 +196,7 @@ def test_scenario_numbers(tmp_path, capsys, planar4r, text, expect):
     for word in expect.words:
         assert word in err, err
     assert "Traceback" not in err
+    assert len(err) < 5000, "a long value is shortened in the message"
     assert out.exists() == expect.made, "a refused scenario must not create its output folder"
     if expect.made:
         summary = json.loads((out / "summary.json").read_text())

@@ -155,10 +155,52 @@ def test_a_2000_link_chain_is_checked_in_linear_time(tmp_path, monkeypatch):
 
     monkeypatch.setattr(urdf_check, "MAX_MOVABLE_JOINTS", 10**6)
     monkeypatch.setattr(urdf_check, "MAX_LINKS", 10**6)
+    monkeypatch.setattr(urdf_check, "MAX_DEPTH", 10**6)
     path = write(tmp_path / "chain.urdf", chain(2000))
     start = time.perf_counter()
     check_urdf(path)
     assert time.perf_counter() - start < 2.0
+
+
+def sensor_tree(n: int, arm: int = 7) -> str:
+    """``n`` links: an arm of ``arm`` revolute joints, then fixed frames hung off it."""
+    links = "".join(f'<link name="l{i}"/>' for i in range(n))
+    joints = "".join(
+        f'<joint name="j{i}" type="revolute"><parent link="l{i - 1}"/><child link="l{i}"/>'
+        '<origin xyz="0 0 0.1"/><axis xyz="0 0 1"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        for i in range(1, arm + 1)
+    ) + "".join(
+        f'<joint name="f{i}" type="fixed"><parent link="l{1 + i % arm}"/><child link="l{i}"/>'
+        '<origin xyz="0.01 0 0"/></joint>'
+        for i in range(arm + 1, n)
+    )
+    return urdf(links + joints)
+
+
+@pytest.mark.parametrize("n", [2000, 10_000])
+def test_thousands_of_links_are_checked_and_loaded(tmp_path, n):
+    """A robot with thousands of fixed frames (sensors, markers) is within the budgets."""
+    path = write(tmp_path / "sensors.urdf", sensor_tree(n))
+    start = time.perf_counter()
+    check_urdf(path)
+    assert time.perf_counter() - start < 2.0 * n / 2000
+    robot = Robot.load(path)
+    assert robot.nq == 7 and robot.model.existFrame(f"l{n - 1}")
+
+
+def test_a_chain_deeper_than_pinocchio_holds_is_refused_at_once(tmp_path):
+    """Pinocchio's reader recurses along the tree (a 5,000-link chain crashes it)."""
+    links = "".join(f'<link name="l{i}"/>' for i in range(5001))
+    joints = "".join(
+        f'<joint name="j{i}" type="{"revolute" if i == 0 else "fixed"}"><parent link="l{i}"/>'
+        f'<child link="l{i + 1}"/><axis xyz="0 0 1"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        for i in range(5000)
+    )
+    path = write(tmp_path / "deep.urdf", urdf(links + joints))
+    message = refused(lambda: Robot.load(path))
+    assert "1001 joints from the root link" in message and "MAX_DEPTH" in message
 
 
 @pytest.mark.parametrize("n", [2000, 10_000])

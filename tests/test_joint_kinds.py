@@ -286,6 +286,8 @@ def test_mimic_follower_value_is_clipped_into_its_limits(tmp_path):
         (('<mimic joint="jc"/>', '<mimic joint="jb"/>'), "mimic joints follow each other"),
         (('<mimic joint="ja" multiplier="two"/>', ""), "multiplier 'two', expected a finite"),
         (('<mimic joint="ja" offset="nan"/>', ""), "offset 'nan', expected a finite"),
+        (('<mimic joint="ja" multiplier="1e300"/>', ""), "multiplier '1e300', expected a number"),
+        (('<mimic joint="ja" offset="-2e3"/>', ""), "offset '-2e3', expected a number of magni"),
     ],
 )
 def test_bad_mimic_is_a_load_error(tmp_path, mimics, message):

@@ -7,6 +7,7 @@ short case study (law (9), ``dt = 2 ms``, ``alpha = 400``: about 0.1 s each).
 
 from __future__ import annotations
 
+import errno
 import io
 import json
 import os
@@ -509,6 +510,20 @@ def test_non_empty_folder_needs_force(tmp_path, short_sweep, capsys):
     code = main(["sweep", str(short_sweep(2, 1)), "--out", str(out), "--workers", "1", "--quiet"])
     assert code == 2
     assert "exists already and holds no sweep results" in capsys.readouterr().err
+
+
+def test_a_full_disk_during_a_sweep_is_an_output_error(tmp_path, short_sweep, capsys, monkeypatch):
+    """An OS error writing the results is exit 2 naming the folder, not an internal error."""
+
+    def no_space(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(ResultStore, "append", no_space)
+    out = tmp_path / "out"
+    code = main(["sweep", str(short_sweep(2, 1)), "--out", str(out), "--workers", "1", "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert f"cannot write output {out}: No space left on device (ENOSPC)" in err, err
 
 
 def test_cli_names_the_bad_key_path(tmp_path, capsys):

@@ -32,7 +32,12 @@ def test_zoo_obstacle_run(name: str) -> None:
     result = run.result
     if result.status == "violated":  # only a start in collision, recorded at t = 0
         assert all(v["t_first"] == 0.0 for v in result.violations), result.violations
-        assert result.min_obstacle_distance[-1] >= 0.03 - 1e-4  # and recovered
+        assert run.setup is not None
+        stuck = run.setup.constraints.immovable_pairs
+        if result.min_obstacle_distance[-1] < 0.03 - 1e-4:  # not recovered: only when
+            # the overlap is on the fixed base, which no motion clears (and the reason says so)
+            assert {v["constraint"] for v in result.violations} <= stuck, result.violations
+            assert "on a link no joint moves" in result.reason, result.reason
     else:
         assert result.status in ("completed", "deadlock"), result.reason
     assert run.max_joint_step <= MAX_STEP, f"joint step {run.max_joint_step:.3g}"

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import clik
-from clik.bench.zoo import DIRECTION, zoo_setup
+from clik.bench.zoo import DIRECTION, ZooSetup, zoo_setup
 
 
 @dataclass
@@ -30,6 +30,7 @@ class ZooRun:
     min_distance: float = float("nan")
     max_joint_step: float = float("nan")
     result: clik.TrackingResult | None = None
+    setup: ZooSetup | None = None
 
 
 def zoo_run(name: str, direction: np.ndarray = DIRECTION) -> ZooRun:
@@ -43,7 +44,7 @@ def zoo_run(name: str, direction: np.ndarray = DIRECTION) -> ZooRun:
         return ZooRun(name, type(exc).__name__, str(exc).splitlines()[0][:200])
     dq = np.abs(np.diff(result.q, axis=0)).max() if len(result.q) > 1 else 0.0
     md = result.summary()["min_obstacle_distance"]
-    return ZooRun(name, result.status, result.reason, float(md), float(dq), result)
+    return ZooRun(name, result.status, result.reason, float(md), float(dq), result, setup)
 
 
 if __name__ == "__main__":

@@ -27,7 +27,7 @@ from clik.bench.step_lines import line_name
 from clik.bench.step_zoo import bench_zoo
 from clik.bench.sweep_rate import bench_sweep
 from clik.bench.targets import evaluate_targets, load_targets
-from clik.io import write_json
+from clik.io import atomic_write, check_out_path, output_errors, write_json
 
 REQUIRED_KEYS = (
     "step_us.planar4r",
@@ -204,12 +204,18 @@ def run_bench(
 
     Returns:
         The report written to ``bench.json``.
+
+    Raises:
+        InputError: ``out`` is an existing file.
+        OutputError: ``out`` cannot be created or written (named, with the OS reason).
     """
     say: Log = log if log is not None else (lambda _line: None)
     config = QUICK if quick else FULL
     target_list = load_targets(targets)
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    check_out_path(out)  # a file, a dangling link or a file as a parent: said before the bench
+    with output_errors(out):
+        out.mkdir(parents=True, exist_ok=True)
     pink, why_not = find_pink()
     report: dict[str, Any] = {
         "quick": quick,
@@ -233,8 +239,10 @@ def run_bench(
     )
     if hasattr(os, "getloadavg"):
         report["machine"]["load_average_1min_end"] = round(os.getloadavg()[0], 2)
-    write_json(out / "bench.json", report)
-    (out / "bench.md").write_text(markdown(report))
+    text = markdown(report)
+    with output_errors(out):  # each file whole or not at all
+        write_json(out / "bench.json", report)
+        atomic_write(out / "bench.md", lambda f: f.write(text), mode="w")
     return report
 
 

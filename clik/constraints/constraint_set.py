@@ -198,6 +198,7 @@ class ConstraintSet:
         self.obs_vel = np.array([o.velocity for o in self.obstacles]).reshape(n_obs, 3)
         if scene is None:
             self.link_labels: list[str] = []
+            self.immovable_pairs: set[str] = set()
             return
         counts: dict[str, int] = {}
         for link in scene.link_names:
@@ -209,6 +210,12 @@ class ConstraintSet:
         self.pair_names = [
             [f"obstacle:{o.name}:{label}" for o in self.obstacles] for label in self.link_labels
         ]
+        self.immovable_pairs = {  # a geometry on the fixed base: its distance never changes
+            name
+            for names, joint in zip(self.pair_names, scene.link_joint, strict=True)
+            if joint == 0
+            for name in names
+        }
         if scene.self_pairs:
             sp = np.array([(a, b) for _, a, b in scene.self_pairs])
             self.self_slots = (scene.link_slot[sp[:, 0]], scene.link_slot[sp[:, 1]])

@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from clik.errors import ClikError, InputError, ScenarioError
+from clik.io import output_errors
 from clik.out_folder import output_lock
 from clik.sweep.progress import RunProgress
 from clik.sweep.spec import RunSpec, Sweep, load_sweep
@@ -291,7 +292,8 @@ def run_sweep(
         values = {v.path: [r.params[v.path] for r in sweep.runs] for v in sweep.vary}
 
         def open_store() -> ResultStore:
-            return ResultStore.open(out, manifest(sweep), values, force=force, fmt=fmt)
+            with output_errors(out):
+                return ResultStore.open(out, manifest(sweep), values, force=force, fmt=fmt)
 
         # Resuming: read what is there first (no cluster for a finished sweep). Else check the
         # folder, connect, and only then create it (a bad --scheduler leaves nothing behind).
@@ -300,7 +302,8 @@ def run_sweep(
         results = out / (PARQUET if fmt != "csv" else CSV)
         report = SweepReport(out, results, len(sweep.runs), len(sweep.runs) - len(todo))
         if store is not None and not todo:
-            store.compact()
+            with output_errors(out):
+                store.compact()
             report.results = store.path
             report.all_statuses = read_statuses(out)
             return report
@@ -311,7 +314,8 @@ def run_sweep(
             report.results = store.path
             _Session(dask, sweep, todo, store, report, bar, keep_trajectories, on_row).run()
         if report.complete:
-            store.compact()
+            with output_errors(out):
+                store.compact()
         report.all_statuses = read_statuses(out)
         return report
 
@@ -425,7 +429,8 @@ class _Session:
 
     def flush(self) -> None:
         """Write the buffered rows (those of run ids not in the folder yet)."""
-        self.report.computed += self.store.append(self.buffer)
+        with output_errors(self.store.out):
+            self.report.computed += self.store.append(self.buffer)
         self.buffer.clear()
         self.last_flush = time.perf_counter()
 
@@ -470,7 +475,8 @@ class _Session:
         row = {"run_id": run.run_id, **run.params, **_without_id(row)}
         summary, trajectory = row.pop("_summary", None), row.pop("_trajectory_npz", None)
         if summary is not None and trajectory is not None:
-            self.store.write_run_files(run.run_id, summary, trajectory)
+            with output_errors(self.store.out):
+                self.store.write_run_files(run.run_id, summary, trajectory)
         self.taken.add(run.run_id)
         self.buffer.append(row)
         self.report.statuses[row["status"]] += 1
