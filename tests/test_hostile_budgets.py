@@ -128,7 +128,15 @@ def bounded(code: str, tmp_path: Path) -> dict:
         except Exception as error:
             out["error"] = type(error).__name__
             out["message"] = str(error)
-        out["maxrss"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+        # The peak of this process's own memory (VmHWM starts anew at exec; ru_maxrss
+        # would keep the high-water mark of the pytest process it was forked from).
+        with open("/proc/self/status") as status:
+            hwm = [line for line in status if line.startswith("VmHWM:")]
+        out["maxrss"] = (
+            int(hwm[0].split()[1]) * 1024
+            if hwm
+            else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+        )
         print(json.dumps(out))
         """
     ).replace("{body}", textwrap.indent(textwrap.dedent(code), "    "))
