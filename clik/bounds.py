@@ -4,3 +4,8 @@ MAX_STEPS = 100_000_000
 """Largest run, ``(duration + settle) / dt + 1`` samples (about 15 minutes at 8 us per
 step): a typo in ``dt`` fails at once, not as a run that never ends or an allocation
 that cannot succeed."""
+
+MAX_RECORD_BYTES = 512 * 2**20
+"""Largest memory for a run's record (the arrays of its kept samples) [bytes]: a long run
+keeps every ``record_every``-th sample within it (a million samples of a 7-joint arm
+with obstacles take about 400 MB)."""

@@ -10,6 +10,21 @@ from __future__ import annotations
 import numpy as np
 
 
+def kept_samples(N: int, every: int) -> int:
+    """Samples kept of ``N`` when keeping every ``every``-th and the last."""
+    return (N - 1) // every + 1 + (1 if (N - 1) % every else 0)
+
+
+def bytes_per_sample(nq: int, nv: int, n_obs: int = 0, slots: int = 0) -> int:
+    """Memory of one kept sample [bytes].
+
+    The record's arrays, and with constraints the per-obstacle distances and links and
+    the active rows' codes and witness points.
+    """
+    own = 8 * (1 + nq + 2 * nv + 3 + 3 + 1 + 1) + 2 + 8
+    return own + n_obs * (8 + 2) + slots * (4 + 8 * 6)
+
+
 class Recorder:
     """Preallocated arrays for ``N`` samples kept every ``every``-th.
 
@@ -32,7 +47,7 @@ class Recorder:
         orientation: bool,
         constraints: bool,
     ) -> None:
-        n = (N - 1) // every + 1 + (1 if (N - 1) % every else 0)
+        n = kept_samples(N, every)
         self.N, self.every, self.decimated = N, every, every > 1
         self.idx = np.empty(n, dtype=np.intp)
         self.q = np.empty((n, nq))

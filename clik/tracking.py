@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from clik.bounds import MAX_STEPS
+from clik.bounds import MAX_RECORD_BYTES, MAX_STEPS
 from clik.compiled_run import compiled_samples
 from clik.constraints.constraint_run import ConstraintRun
 from clik.engine import ENGINES
@@ -30,7 +30,7 @@ from clik.extended_task import ExtendedTask
 from clik.gains import row_gains, stability_margin
 from clik.laws import LawName, check_law, finite, nonlinear, prioritized, transpose
 from clik.reach import reach_bound
-from clik.recording import Recorder
+from clik.recording import Recorder, bytes_per_sample, kept_samples
 from clik.reference_stream import REFERENCE_CHUNK, ReferenceChunks
 from clik.result import TrackingResult
 from clik.stop_checks import StopChecks, StopSettings
@@ -199,6 +199,7 @@ class Tracker:
                 f"{trajectory.duration + settle:g} s (this one gives {steps_needed:.3g})",
                 self.dt,
             )
+        self.check_record(trajectory.duration + settle, int(record_every))
         t = time_grid(trajectory.duration + settle, self.dt)
         chunks, out_of_reach = self._reference(trajectory, t)
         self._warn_stability(q)
@@ -208,6 +209,38 @@ class Tracker:
         )  # fmt: skip
         run = _Run(self, t, chunks, int(record_every), settings, progress)
         return run.execute(q, out_of_reach)
+
+    def check_record(self, duration: float, record_every: int) -> None:
+        """Refuse a run whose record would exceed :data:`~clik.bounds.MAX_RECORD_BYTES`.
+
+        Args:
+            duration: The run's time span, trajectory and settling [s].
+            record_every: The decimation asked for.
+
+        Raises:
+            InputError: ``record_every`` too small for this run; the message gives the
+                smallest that fits.
+        """
+        N = round(duration / self.dt) + 1
+        cset = self.constraints
+        n_obs = 0 if cset is None else len(cset.obstacles)
+        slots = 0 if cset is None else max(cset.row_limit(self.task.m, self.law), 1)
+        size = bytes_per_sample(self.robot.nq, self.robot.nv, n_obs, slots)
+        if kept_samples(N, record_every) * size <= MAX_RECORD_BYTES:
+            return
+        fits = MAX_RECORD_BYTES // size - 1
+        least = max(record_every + 1, -(-(N - 1) // max(fits - 1, 1)))
+        while kept_samples(N, least) * size > MAX_RECORD_BYTES:
+            least += 1
+        mb = kept_samples(N, record_every) * size / 2**20
+        raise InputError(
+            "record_every",
+            f"an integer >= {least} for this run: keeping "
+            + ("all" if record_every == 1 else f"every {record_every}-th")
+            + f" of its {N} samples ({size} bytes each) takes {mb:.0f} MB, above the budget of "
+            f"{MAX_RECORD_BYTES // 2**20} MB (clik.bounds.MAX_RECORD_BYTES)",
+            record_every,
+        )
 
     def _reference(self, trajectory: Trajectory, t: np.ndarray) -> tuple[ReferenceChunks, str]:
         """The reference in chunks, and why it is out of reach ("" when it is not).

@@ -176,6 +176,18 @@ NUMBERS = [
         id="task-frame-megabyte",
     ),
     pytest.param(
+        case("duration = 3.0\ncruise_speed = 0.12", "duration = 20000.0"),
+        Exits(2, ("solver.record_every", "an integer >= 11", "MAX_RECORD_BYTES")),
+        id="record-too-large-for-memory",
+    ),
+    pytest.param(
+        case("duration = 3.0\ncruise_speed = 0.12", "duration = 20000.0").replace(
+            "dt = 0.001", "dt = 0.001\nrecord_every = 10"
+        ),
+        Exits(2, ("solver.record_every", "an integer >= 11", "every 10-th of its 20000001")),
+        id="record-every-too-small-for-memory",
+    ),
+    pytest.param(
         CASE,
         Exits(0, (), made=True),
         id="in-range-runs",
@@ -344,3 +356,20 @@ def test_zoo_robots_once_refused_now_run(name):
         assert_within_limits(result, result.robot)
     if name == "centauro":
         assert result.info["links"], "the other geometries stay monitored"
+
+
+def test_the_record_budget_names_the_smallest_decimation_that_fits(planar4r):
+    """``Tracker.check_record``: the ``record_every`` it names fits, the one below does not."""
+    from clik.bounds import MAX_RECORD_BYTES
+    from clik.recording import bytes_per_sample, kept_samples
+
+    tracker = clik.Tracker(Task(planar4r, "tip", "position", axes=["x", "y"]), dt=1e-3)
+    with pytest.raises(clik.InputError, match="record_every: expected an integer >= ") as caught:
+        tracker.check_record(5000.0, 1)
+    least = int(str(caught.value).split(">= ")[1].split()[0])
+    size = bytes_per_sample(planar4r.nq, planar4r.nv)
+    assert kept_samples(5_000_001, least) * size <= MAX_RECORD_BYTES
+    assert kept_samples(5_000_001, least - 1) * size > MAX_RECORD_BYTES
+    tracker.check_record(5000.0, least)  # no error
+    with pytest.raises(clik.InputError, match="record_every"):  # the run itself checks too
+        tracker.run(Hold(position=np.zeros(3), duration=5000.0), record_every=least - 1)
