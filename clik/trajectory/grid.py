@@ -27,4 +27,6 @@ def time_grid(duration: float, dt: float) -> np.ndarray:
     duration = _validate.nonnegative(duration, "duration", "[s]")
     dt = _validate.positive(dt, "dt", "[s]")
     n = round(duration / dt) + 1
-    return np.arange(n, dtype=float) * dt
+    t = np.arange(n, dtype=float)
+    t *= dt  # in place: a 10^8-sample grid is 800 MB, not twice that
+    return t

@@ -46,7 +46,7 @@ T* data_of(nb::handle array) {
 
 // A run and the Python objects whose memory it uses (kept alive with it).
 struct PyTrackingRun {
-  nb::object model, recorder;
+  nb::object model, recorder, times;
   std::unique_ptr<ConstraintRun> constraints;  // before run: it outlives the loop's use
   std::unique_ptr<TrackingRun> run;
 };
@@ -55,7 +55,7 @@ PyTrackingRun make_run(nb::object model, int frame, std::vector<int> rows, bool 
                        bool has_orientation, const std::string& law, double damping, double dt,
                        double beta_max, const Vec& K_task, int n_rows,
                        std::tuple<double, double, double, double, double, double> stop,
-                       const Vec& t, nb::object recorder, std::vector<int> joint_index,
+                       nb::object t, nb::object recorder, std::vector<int> joint_index,
                        const Vec& joint_lower, const Vec& joint_upper,
                        std::vector<std::string> joint_names, nb::handle constraints,
                        double alpha) {
@@ -85,18 +85,22 @@ PyTrackingRun make_run(nb::object model, int frame, std::vector<int> rows, bool 
   b.joint_max = data_of<double>(recorder.attr("joint_max"));
   b.qdot_prev = data_of<double>(recorder.attr("_qdot_prev"));
   JointRange joints{std::move(joint_index), joint_lower, joint_upper, std::move(joint_names)};
-  PyTrackingRun out{model, recorder, nullptr, nullptr};
+  // No conversion: a converted copy would die here, leaving the view dangling.
+  const auto grid =
+      nb::cast<nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu>>(t, false);
+  const TimesView times(grid.data(), static_cast<Eigen::Index>(grid.shape(0)));
+  PyTrackingRun out{model, recorder, t, nullptr, nullptr};
   if (!constraints.is_none()) {
     const ConstraintConfig cfg = config_from_set(constraints);
     const int m_rows = static_cast<int>(task.rows.size());
-    out.constraints = std::make_unique<ConstraintRun>(cfg, m, m_rows, ls.kind, alpha, t,
+    out.constraints = std::make_unique<ConstraintRun>(cfg, m, m_rows, ls.kind, alpha, times,
                                                       static_cast<int>(b.capacity), task.frame,
                                                       task.rows);
     if (m_rows + std::max(out.constraints->limit(), 0) > n_rows) {
       throw std::invalid_argument("n_rows: fewer than the task's and the constraints' rows");
     }
   }
-  out.run = std::make_unique<TrackingRun>(m, task, ls, K_task, n_rows, ss, t, b,
+  out.run = std::make_unique<TrackingRun>(m, task, ls, K_task, n_rows, ss, times, b,
                                           std::move(joints), out.constraints.get());
   return out;
 }

@@ -19,7 +19,7 @@ constexpr auto LWA = pinocchio::LOCAL_WORLD_ALIGNED;
 
 TrackingRun::TrackingRun(const pinocchio::Model& model, const TaskSpec& task,
                          const LawSettings& law, const Vec& K_task, int rows,
-                         const StopSettings& stop, const Vec& t, const RecordBuffers& record,
+                         const StopSettings& stop, const TimesView& t, const RecordBuffers& record,
                          JointRange joints, ConstraintRun* constraints)
     : model_(model), data_(model), task_(task), m_(static_cast<int>(task.rows.size())),
       dt_(law.dt), t_(t), ext_(m_, rows, model.nv, K_task), law_(law, rows, model.nv),

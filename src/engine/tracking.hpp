@@ -47,7 +47,7 @@ struct Advance {
 class TrackingRun {
  public:
   TrackingRun(const pinocchio::Model& model, const TaskSpec& task, const LawSettings& law,
-              const Vec& K_task, int rows, const StopSettings& stop, const Vec& t,
+              const Vec& K_task, int rows, const StopSettings& stop, const TimesView& t,
               const RecordBuffers& record, JointRange joints, ConstraintRun* constraints);
 
   // Runs samples [c0, c1) with the chunk's reference: P_d (n, 3) or null, R_d
@@ -76,7 +76,7 @@ class TrackingRun {
   TaskSpec task_;
   int m_;
   double dt_;
-  Vec t_;
+  TimesView t_;
   ExtendedTask ext_;
   Law law_;
   StopChecks checks_;

@@ -12,6 +12,10 @@ using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajo
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 
+// A run's sample times t_k [s], read in place from the caller's array (a 10^8-sample run's
+// grid is 800 MB: never copied). The array must outlive the run that reads it.
+using TimesView = Eigen::Map<const Vec>;
+
 // A task has at most six rows (x, y, z, rx, ry, rz): its square matrices live on the
 // stack (fixed capacity, run-time size), faster than heap matrices at this size.
 constexpr int MAX_TASK_ROWS = 6;

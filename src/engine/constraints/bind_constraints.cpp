@@ -264,7 +264,9 @@ void bind_constraints(nb::module_& m) {
           throw std::invalid_argument("constraint_trace: inconsistent array shapes");
         }
         const LawKind kind = law_kind(law);
-        ConstraintRun run(cfg, model, m_rows, kind, alpha, t, n_rec, frame, std::move(task_rows));
+        const TimesView times(t.data(), t.size());
+        ConstraintRun run(cfg, model, m_rows, kind, alpha, times, n_rec, frame,
+                          std::move(task_rows));
         const int limit = run.limit();
         const int rows = m_rows + std::max(limit, 0);
         LawSettings s;

@@ -43,7 +43,7 @@ const char* action_name(EventAction action) {
 }
 
 ConstraintRun::ConstraintRun(const ConstraintConfig& config, const pinocchio::Model& model, int m,
-                             LawKind law, double alpha, const Vec& t, int n_rec, int frame,
+                             LawKind law, double alpha, const TimesView& t, int n_rec, int frame,
                              std::vector<int> task_rows)
     : cfg_(config), model_(model), m_(m), law_(law), alpha_(alpha), t_(t) {
   if (model.nv != cfg_.nv || model.nq != cfg_.nq) {

@@ -101,7 +101,7 @@ class ConstraintRun {
  public:
   // Throws std::invalid_argument for a dexterity row without the task's frame and rows.
   ConstraintRun(const ConstraintConfig& config, const pinocchio::Model& model, int m, LawKind law,
-                double alpha, const Vec& t, int n_rec, int frame = -1,
+                double alpha, const TimesView& t, int n_rec, int frame = -1,
                 std::vector<int> task_rows = {});
   // The scene points into the run's own copy of the config: neither copied nor moved.
   ConstraintRun(const ConstraintRun&) = delete;
@@ -172,7 +172,7 @@ class ConstraintRun {
   LawKind law_;
   double alpha_;
   int limit_;
-  Vec t_;
+  TimesView t_;
   int n_obs_, n_links_, n_self_, n_joint_rows_;
   int obstacle_base_, self_base_;  // first key of the obstacle pairs and of the link pairs
   int dexterity_key_ = -1;         // the dexterity row's key (after the link pairs)
