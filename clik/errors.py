@@ -16,22 +16,27 @@ SHOWN_CHARACTERS = 200
 """Characters of a long name or value shown in a message (the rest is counted)."""
 
 
-def _short(value: object) -> str:
-    """``repr(value)``, cut to :data:`SHOWN_CHARACTERS` with the full length said."""
+def shown(value: object, limit: int = SHOWN_CHARACTERS) -> str:
+    """A value as messages show it: its ``repr``, cut to ``limit`` characters when longer.
+
+    A cut string shows its first ``limit`` characters, quoted, and its length; any other
+    value the first ``limit`` characters of its ``repr`` and that repr's length.
+    """
+    if isinstance(value, str):
+        if len(value) <= limit:
+            return repr(value)
+        return f"{value[:limit]!r}... ({len(value)} characters)"
     text = repr(value)
-    if len(text) <= SHOWN_CHARACTERS:
-        return text
-    size = f"{len(value)} characters" if isinstance(value, str) else f"{len(text)} characters"
-    return f"{text[:SHOWN_CHARACTERS]}... ({size})"
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
 
 
 def _listing(names: Iterable[str], limit: int = 40) -> str:
     """Comma-separated list of names, shortened past ``limit`` entries."""
     names = list(names)
-    shown = ", ".join(_short(n) for n in names[:limit])
+    text = ", ".join(shown(n) for n in names[:limit])
     if len(names) > limit:
-        shown += f", ... ({len(names) - limit} more)"
-    return shown
+        text += f", ... ({len(names) - limit} more)"
+    return text
 
 
 class ClikError(Exception):
@@ -55,7 +60,7 @@ class InputError(ClikError, ValueError):
         self.got = got
         message = f"{field}: expected {expected}"
         if got is not None:
-            message += f", got {_short(got)}"
+            message += f", got {shown(got)}"
         super().__init__(message)
 
 
@@ -100,7 +105,7 @@ class FrameNotFound(ClikError, KeyError):
         self.name = name
         self.frames = list(frames)
         super().__init__(
-            f"frame {_short(name)} not found; available frames: {_listing(self.frames)}"
+            f"frame {shown(name)} not found; available frames: {_listing(self.frames)}"
         )
 
     def __str__(self) -> str:  # KeyError quotes its message otherwise
@@ -119,7 +124,7 @@ class JointNotFound(ClikError, KeyError):
         self.name = name
         self.joints = list(joints)
         super().__init__(
-            f"joint {_short(name)} not found; available joints: {_listing(self.joints)}"
+            f"joint {shown(name)} not found; available joints: {_listing(self.joints)}"
         )
 
     def __str__(self) -> str:

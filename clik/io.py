@@ -17,7 +17,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any
 
-from clik.errors import ClikError, InputError, OutputError, OutputExistsError
+from clik.errors import ClikError, InputError, OutputError
 
 
 def os_reason(error: OSError) -> str:
@@ -78,22 +78,6 @@ def check_parents(out: Path) -> None:
             if not parent.is_dir():
                 raise OutputError(out, f"{parent} is a file, not a folder (ENOTDIR)")
             return
-
-
-def prepare_out(out: Path, force: bool) -> Path:
-    """Create the output folder; an existing non-empty one needs ``force``.
-
-    Raises:
-        InputError: ``out`` is an existing file.
-        OutputExistsError: ``out`` is a non-empty folder and ``force`` is false.
-        OutputError: ``out`` cannot be created (see :func:`check_out_path`, or the OS reason).
-    """
-    check_out_path(out)
-    with output_errors(out):
-        if out.exists() and any(out.iterdir()) and not force:
-            raise OutputExistsError(out)
-        out.mkdir(parents=True, exist_ok=True)
-    return out
 
 
 def _umask() -> int:

@@ -112,13 +112,13 @@ def solve_small(A: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def finite(*arrays: np.ndarray) -> bool:
-    """Whether every entry of every array is finite (a solver is only called on such).
+    """Whether every entry of every array is finite, and their sum too (no solver call else).
 
     LAPACK's SVD and eigensolvers may loop without end, or fail, on inf or NaN; the laws
     return NaN joint velocities instead, which the tracking loop stops as ``diverged``
     (:func:`clik.stop_checks.non_finite_reason`), as the compiled engine does.
     """
-    return all(math.isfinite(float(np.sum(np.abs(a)))) for a in arrays)
+    return all(math.isfinite(float(a.sum())) for a in arrays)  # inf or NaN: a sum not finite
 
 
 def _numpy_solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -3,7 +3,7 @@
 Mesh files (a URDF's link meshes, a scenario's obstacle meshes) are read by
 assimp through coal. assimp follows side files a mesh names (an OBJ's
 ``mtllib``, a glTF's buffers), blocks on a FIFO and takes minutes and gigabytes
-on a 100 MB mesh. :func:`mesh_problem` looks at the file before that: it must be
+on a 100 MB mesh. :func:`check_mesh_file` looks at the file before that: it must be
 a regular file (``os.stat``, never opened when it is not), of a format clik
 reads (:data:`MESH_FORMATS`), within :data:`MAX_MESH_BYTES`, with vertex and
 face counts read cheaply from the file (binary STL header, OBJ ``v``/``f``
@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from clik.bounds import MAX_COORDINATE, SCALE_RANGE
+
 MESH_FORMATS = (".stl", ".obj", ".dae", ".ply")
 """Mesh file suffixes clik reads (any case); others (glTF, FBX, ...) may name side files."""
 
@@ -35,12 +37,6 @@ MAX_MESH_BYTES = 64 * 2**20
 
 MAX_MESH_ELEMENTS = 2_000_000
 """Most vertices, and most faces, a mesh file may declare."""
-
-MAX_COORDINATE = 1000.0
-"""Largest absolute position or size [m]: a mesh's scaled vertices, a URDF origin."""
-
-SCALE_RANGE = (1e-6, 1e6)
-"""Accepted range of the absolute value of each mesh scale factor."""
 
 _MTLLIB = re.compile(rb"^[ \t]*mtllib[ \t]+(.*?)[ \t]*\r?$", re.MULTILINE)
 _SIDE_LINE = re.compile(rb"^[ \t]*(mtllib|usemtl)\b.*$", re.MULTILINE)

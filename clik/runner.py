@@ -163,12 +163,12 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
     except InputError as exc:
         key = "solver.law" if exc.field == "constraints" else f"solver.{exc.field}"
         raise _where(scenario, key, exc) from None
-    try:  # a record too large for memory: said now, before any output folder is made
-        tracker.check_record(
+    try:  # a run too long, or a record too large for memory: said before any output
+        tracker.check_size(
             float(trajectory.duration) + solver["settle"], int(solver["record_every"])
         )
     except InputError as exc:
-        raise _where(scenario, "solver.record_every", exc) from None
+        raise _where(scenario, f"solver.{exc.field}", exc) from None
     return Run(scenario, robot, task, trajectory, tracker, q0, _speed_limits(scenario, robot))
 
 

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from clik.bounds import MAX_STEPS
+from clik.bounds import MAX_STEPS, SCALE_RANGE
 from clik.engine import ENGINES
 from clik.errors import ClikError, ScenarioError
 from clik.robot import JointValues
@@ -45,7 +45,6 @@ from clik.schema import (
     MAX_SPEED,
     MIN_DURATION,
     MIN_SAMPLES,
-    SCALE_RANGE,
     Table,
 )
 from clik.speed_limits import MAX_PASSES, MAX_SCALE

@@ -13,15 +13,14 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from clik.errors import ScenarioError
+from clik.bounds import MAX_COORDINATE
+from clik.errors import ScenarioError, shown
 
 _MISSING = object()
-_SHOWN = 200
-"""Longest shown value in a message, in characters (longer ones are cut)."""
 
 # Physical ranges of scenario numbers (README, "Ranges"): a number beyond its range is a
 # typo or a probe, refused naming its key before anything is computed.
-MAX_LENGTH = 1000.0
+MAX_LENGTH = MAX_COORDINATE
 """Largest position coordinate, size, distance or threshold [m] (1 km)."""
 MAX_SPEED = 1000.0
 """Largest obstacle velocity component or cruise speed [m/s]."""
@@ -29,8 +28,6 @@ MAX_ANGLE = 8.0 * math.pi
 """Largest angle magnitude [rad] (four turns): circle arcs, rpy angles, thresholds."""
 MAX_JOINT_VALUE = 1000.0
 """Largest joint value magnitude [rad or m] (initial.q, robot.lock, overrides)."""
-SCALE_RANGE = (1e-6, 1e6)
-"""Smallest and largest mesh scale factor."""
 MAX_GAIN_DT = 1e4
 """Largest ``gain * dt`` (any gain [1/s] times ``solver.dt`` [s]): law (10) is stable only
 below 2, laws (9) and (8) below ``2 / lambda_max(J J^T)``; beyond this no robot tracks."""
@@ -71,10 +68,7 @@ class Table:
         """A :class:`ScenarioError` for key ``name``."""
         message = f"expected {expected}"
         if got is not _MISSING:
-            shown = repr(got)
-            if len(shown) > _SHOWN:
-                shown = f"{shown[: _SHOWN - 20]}... ({len(shown)} characters)"
-            message += f", got {shown}"
+            message += f", got {shown(got)}"
         return ScenarioError(self.file, self.key(name), message)
 
     def has(self, name: str) -> bool:

@@ -191,15 +191,7 @@ class Tracker:
             raise InputError("record_every", "an integer >= 1", record_every)
         if not (math.isfinite(settle) and settle >= 0.0):
             raise InputError("settle", "a time >= 0 [s]", settle)
-        steps_needed = (trajectory.duration + settle) / self.dt + 1
-        if steps_needed > MAX_STEPS:
-            raise InputError(
-                "dt",
-                f"a step giving at most {MAX_STEPS:.0e} steps over the trajectory's "
-                f"{trajectory.duration + settle:g} s (this one gives {steps_needed:.3g})",
-                self.dt,
-            )
-        self.check_record(trajectory.duration + settle, int(record_every))
+        self.check_size(trajectory.duration + settle, int(record_every))
         t = time_grid(trajectory.duration + settle, self.dt)
         chunks, out_of_reach = self._reference(trajectory, t)
         self._warn_stability(q)
@@ -210,17 +202,28 @@ class Tracker:
         run = _Run(self, t, chunks, int(record_every), settings, progress)
         return run.execute(q, out_of_reach)
 
-    def check_record(self, duration: float, record_every: int) -> None:
-        """Refuse a run whose record would exceed :data:`~clik.bounds.MAX_RECORD_BYTES`.
+    def check_size(self, duration: float, record_every: int) -> None:
+        """Refuse a run too long or whose record would not fit in memory.
+
+        At most :data:`~clik.bounds.MAX_STEPS` samples, and a record within
+        :data:`~clik.bounds.MAX_RECORD_BYTES`.
 
         Args:
             duration: The run's time span, trajectory and settling [s].
             record_every: The decimation asked for.
 
         Raises:
-            InputError: ``record_every`` too small for this run; the message gives the
-                smallest that fits.
+            InputError: ``dt`` too small for ``duration``; or ``record_every`` too small
+                for this run, the message giving the smallest that fits.
         """
+        steps_needed = duration / self.dt + 1
+        if steps_needed > MAX_STEPS:
+            raise InputError(
+                "dt",
+                f"a step giving at most {MAX_STEPS:.0e} steps over the trajectory's "
+                f"{duration:g} s (this one gives {steps_needed:.3g})",
+                self.dt,
+            )
         N = round(duration / self.dt) + 1
         cset = self.constraints
         n_obs = 0 if cset is None else len(cset.obstacles)
@@ -228,10 +231,8 @@ class Tracker:
         size = bytes_per_sample(self.robot.nq, self.robot.nv, n_obs, slots)
         if kept_samples(N, record_every) * size <= MAX_RECORD_BYTES:
             return
-        fits = MAX_RECORD_BYTES // size - 1
-        least = max(record_every + 1, -(-(N - 1) // max(fits - 1, 1)))
-        while kept_samples(N, least) * size > MAX_RECORD_BYTES:
-            least += 1
+        fits = MAX_RECORD_BYTES // size  # kept_samples(N, every) = ceil((N - 1) / every) + 1
+        least = -(-(N - 1) // (fits - 1))
         mb = kept_samples(N, record_every) * size / 2**20
         raise InputError(
             "record_every",

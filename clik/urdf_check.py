@@ -33,6 +33,7 @@ from pathlib import Path
 
 from lxml import etree
 
+from clik import errors
 from clik.errors import RobotLoadError
 from clik.mesh_check import (
     MAX_COORDINATE,
@@ -214,9 +215,7 @@ def _check_budgets(path: Path, data: bytes) -> None:
 
 def shown(name: str) -> str:
     """A name as messages show it: quoted, cut to :data:`SHOWN_NAME` characters when long."""
-    if len(name) <= SHOWN_NAME:
-        return repr(name)
-    return f"{name[:SHOWN_NAME]!r}... ({len(name)} characters)"
+    return errors.shown(name, SHOWN_NAME)
 
 
 def check_urdf(

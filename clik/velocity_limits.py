@@ -27,7 +27,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clik.bounds import MAX_STEPS
 from clik.errors import InputError
 from clik.speed_limits import SpeedBounds, SpeedLimits
 from clik.time_scaling import retime, slowdown
@@ -125,13 +124,10 @@ def run_within_limits(
             limits.margin,
         )
         retimed = retime(trajectory, retimed, result.t, factor, tracker.dt)
-        if (retimed.duration + settle) / tracker.dt + 1 > MAX_STEPS:
-            passes.stop = f"stretching it further would exceed {MAX_STEPS:.0e} steps"
-            break
-        try:
-            tracker.check_record(retimed.duration + settle, record_every)
+        try:  # the stretched run within the step and record budgets
+            tracker.check_size(retimed.duration + settle, record_every)
         except InputError as exc:
-            passes.stop = f"stretching it further would exceed the record budget ({exc})"
+            passes.stop = f"stretching it further would exceed a budget ({exc})"
             break
         with warnings.catch_warnings():  # said once, by the first run
             warnings.simplefilter("ignore", ReachWarning)

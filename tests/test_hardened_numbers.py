@@ -359,17 +359,26 @@ def test_zoo_robots_once_refused_now_run(name):
 
 
 def test_the_record_budget_names_the_smallest_decimation_that_fits(planar4r):
-    """``Tracker.check_record``: the ``record_every`` it names fits, the one below does not."""
+    """``Tracker.check_size``: the ``record_every`` it names fits, the one below does not."""
     from clik.bounds import MAX_RECORD_BYTES
     from clik.recording import bytes_per_sample, kept_samples
 
     tracker = clik.Tracker(Task(planar4r, "tip", "position", axes=["x", "y"]), dt=1e-3)
     with pytest.raises(clik.InputError, match="record_every: expected an integer >= ") as caught:
-        tracker.check_record(5000.0, 1)
+        tracker.check_size(5000.0, 1)
     least = int(str(caught.value).split(">= ")[1].split()[0])
     size = bytes_per_sample(planar4r.nq, planar4r.nv)
     assert kept_samples(5_000_001, least) * size <= MAX_RECORD_BYTES
     assert kept_samples(5_000_001, least - 1) * size > MAX_RECORD_BYTES
-    tracker.check_record(5000.0, least)  # no error
+    tracker.check_size(5000.0, least)  # no error
     with pytest.raises(clik.InputError, match="record_every"):  # the run itself checks too
         tracker.run(Hold(position=np.zeros(3), duration=5000.0), record_every=least - 1)
+
+
+def test_a_threshold_no_joint_can_use_is_refused_from_python_too(planar4r):
+    """``JointLimits`` itself refuses it (the scenario's check is this one)."""
+    from clik.constraints import JointLimits
+
+    with pytest.raises(clik.InputError, match=r"constraints\.joint_limits\.threshold: expected a"):
+        JointLimits(planar4r, 1e300)
+    assert JointLimits(planar4r, 1.0).threshold.max() <= 0.25 * 2 * np.pi  # capped, not refused

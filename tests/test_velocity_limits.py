@@ -54,6 +54,13 @@ def hand_task(panda: clik.Robot) -> clik.Task:
     return clik.Task(panda, "panda_hand", "position")
 
 
+def hand_run(panda: clik.Robot, line: Line | None = None, **kwargs) -> TrackingResult:
+    """:func:`track_within_limits` on the hand's fast line from the reference, law (10)."""
+    kwargs = {"law": "pseudoinverse", "gain": GAIN, **kwargs}
+    line = hand_line(panda) if line is None else line
+    return track_within_limits(hand_task(panda), line, q0=panda.q_reference, **kwargs)
+
+
 def scenario(
     tmp_path: Path,
     panda: clik.Robot,
@@ -154,15 +161,8 @@ def test_the_scenario_stays_within_its_limits(constrained, unconstrained, panda)
 @pytest.mark.parametrize("engine", ["compiled", "python"])
 def test_the_api_stays_within_its_limits(panda, constrained, engine):
     line = hand_line(panda)
-    result = track_within_limits(
-        hand_task(panda),
-        line,
-        velocity_limits=SpeedLimits(scale=1.0, acceleration=None),
-        q0=panda.q_reference,
-        law="pseudoinverse",
-        gain=GAIN,
-        dt=DT,
-        engine=engine,
+    result = hand_run(
+        panda, line, velocity_limits=SpeedLimits(scale=1.0, acceleration=None), dt=DT, engine=engine
     )
     assert result.status == "completed", result.reason
     assert_within_limits(result, panda)
@@ -176,14 +176,7 @@ def test_the_api_stays_within_its_limits(panda, constrained, engine):
 
 
 def test_a_smaller_scale_gives_slower_joints_and_a_longer_run(panda, constrained):
-    result = track_within_limits(
-        hand_task(panda),
-        hand_line(panda),
-        velocity_limits=SpeedLimits(scale=0.5),
-        q0=panda.q_reference,
-        law="pseudoinverse",
-        gain=GAIN,
-    )
+    result = hand_run(panda, velocity_limits=SpeedLimits(scale=0.5))
     assert result.status == "completed", result.reason
     assert_within_limits(result, panda)
     assert velocity_ratio(result.qdot, panda) <= 0.5 + RATIO_TOL
@@ -193,14 +186,7 @@ def test_a_smaller_scale_gives_slower_joints_and_a_longer_run(panda, constrained
 
 def test_an_acceleration_limit_is_respected_too(panda):
     amax = 5.0
-    result = track_within_limits(
-        hand_task(panda),
-        hand_line(panda),
-        velocity_limits=SpeedLimits(acceleration=amax),
-        q0=panda.q_reference,
-        law="pseudoinverse",
-        gain=GAIN,
-    )
+    result = hand_run(panda, velocity_limits=SpeedLimits(acceleration=amax))
     assert result.status == "completed", result.reason
     assert_within_limits(result, panda)
     qddot = np.diff(result.qdot, axis=0) / np.diff(result.t)[:, None]
@@ -212,14 +198,7 @@ def test_an_acceleration_limit_is_respected_too(panda):
 
 
 def test_a_per_joint_acceleration_limit_bounds_that_joint_only(panda):
-    result = track_within_limits(
-        hand_task(panda),
-        hand_line(panda),
-        velocity_limits=SpeedLimits(acceleration={"panda_joint3": 3.0}),
-        q0=panda.q_reference,
-        law="pseudoinverse",
-        gain=GAIN,
-    )
+    result = hand_run(panda, velocity_limits=SpeedLimits(acceleration={"panda_joint3": 3.0}))
     assert result.status == "completed", result.reason
     assert_within_limits(result, panda)
     qddot = np.diff(result.qdot, axis=0) / np.diff(result.t)[:, None]
@@ -244,13 +223,7 @@ def test_the_scenario_takes_an_acceleration_table(panda, tmp_path):
 
 def test_error_correction_alone_ends_velocity_limit(panda):
     """A start 0.1 m from the reference with K = 500: K e is 50 m/s, re-timing cannot help."""
-    result = track_within_limits(
-        hand_task(panda),
-        hand_line(panda, offset=(0.1, 0.0, 0.0)),
-        q0=panda.q_reference,
-        law="pseudoinverse",
-        gain=500.0,
-    )
+    result = hand_run(panda, hand_line(panda, offset=(0.1, 0.0, 0.0)), gain=500.0)
     ratio = velocity_ratio(result.qdot, panda)
     assert ratio > 1.5
     assert result.status == "velocity_limit"
@@ -279,14 +252,7 @@ def test_error_correction_alone_exits_3_from_the_command_line(panda, tmp_path):
 def test_with_a_constraint_set(panda):
     """The passes run with the constraint rows: joint ranges kept, speeds within limits."""
     constraints = ConstraintSet(panda, joint_limits=JointLimits(panda, np.radians(5.0)))
-    result = track_within_limits(
-        hand_task(panda),
-        hand_line(panda),
-        q0=panda.q_reference,
-        law="pseudoinverse",
-        gain=GAIN,
-        constraints=constraints,
-    )
+    result = hand_run(panda, constraints=constraints)
     assert result.status == "completed", result.reason
     assert_within_limits(result, panda)
     assert velocity_ratio(result.qdot, panda) <= 1.0 + RATIO_TOL

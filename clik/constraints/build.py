@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING, Any
 
 from clik.constraints.constraint_set import ConstraintSet
@@ -10,7 +9,6 @@ from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits, convert_override
 from clik.constraints.obstacle import Obstacle
 from clik.errors import ClikError, GeometryError, InputError, JointNotFound, ScenarioError
-from clik.robot import PRISMATIC, REVOLUTE
 
 if TYPE_CHECKING:
     from clik.robot import Robot
@@ -49,7 +47,6 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
     obs, jl_spec, sc = c["obstacles"], c["joint_limits"], c["self_collision"]
     joint_limits = None
     if jl_spec["enabled"] or jl_spec["override"]:  # a bad override is an error even when off
-        _check_thresholds(scenario, robot, jl_spec)
         try:
             override = jl_spec["override"]
             if "override_as_written" in jl_spec:  # parse_scenario's; older dicts: radians
@@ -67,7 +64,8 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
                 scenario.file, "constraints.joint_limits.override", str(exc)
             ) from None
         except InputError as exc:
-            raise ScenarioError(scenario.file, exc.field, str(exc)) from None
+            message = str(exc).removeprefix(f"{exc.field}: ")  # the key is said once
+            raise ScenarioError(scenario.file, exc.field, message) from None
         if not jl_spec["enabled"]:
             joint_limits = None
     dx_spec = c.get("dexterity") or {"enabled": False, "gain": None}
@@ -94,35 +92,6 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
         )
     except ClikError as exc:
         raise ScenarioError(scenario.file, "constraints", str(exc)) from None
-
-
-def _check_thresholds(scenario: Scenario, robot: Robot, spec: dict[str, Any]) -> None:
-    """Refuse a joint-range threshold no joint can use: at least every joint's whole range.
-
-    A threshold is capped at a quarter of each joint's range (:class:`JointLimits`), so a
-    somewhat large one still works; one as large as the widest range of its kind of joint
-    (``1e300``) is a typo, named by its key.
-    """
-    kinds = robot.joint_kinds
-    for kind, key, unit in (
-        (REVOLUTE, "threshold", "rad"),
-        (PRISMATIC, "prismatic_threshold", "m"),
-    ):
-        threshold = spec.get(key)
-        ranges = [
-            robot.upper[j.idx_q] - robot.lower[j.idx_q]
-            for name, j in zip(robot.joint_names, robot.model.joints[1:], strict=True)
-            if kinds[name] == kind
-        ]
-        ranges = [h for h in ranges if math.isfinite(h) and h > 0.0]
-        if threshold is None or not ranges or threshold < max(ranges):
-            continue
-        raise ScenarioError(
-            scenario.file,
-            f"constraints.joint_limits.{key}",
-            f"expected a threshold smaller than a {kind} joint's range (the widest range "
-            f"of {robot.name} is {max(ranges):.6g} {unit}), got {threshold:.6g} {unit}",
-        )
 
 
 def _dexterity(scenario: Scenario, spec: dict[str, Any]) -> Dexterity | None:

@@ -163,6 +163,7 @@ class JointLimits:
         thr = thr_q[self.q_index]
         if prismatic_threshold is not None:
             thr[[k == PRISMATIC for k in self.kinds]] = p_thr
+        self._check_usable(thr, model, prismatic=prismatic_threshold is not None)
         self.threshold = np.minimum(thr, RANGE_FRACTION * (self.upper - self.lower))
         self.names = [f"joint:{name}:lower" for name in self.joint_names] + [
             f"joint:{name}:upper" for name in self.joint_names
@@ -173,6 +174,28 @@ class JointLimits:
         self.sign = np.concatenate([np.ones(n), -np.ones(n)])
         self.errors = np.zeros(2 * n)
         self._qi = np.zeros(n)
+
+    def _check_usable(self, thr: np.ndarray, model: Any, prismatic: bool) -> None:
+        """Refuse a threshold at least as wide as the widest (URDF) range of its kind.
+
+        Each threshold is capped at :data:`RANGE_FRACTION` of its joint's range, so a
+        somewhat large one still works; one that no joint of its kind could use
+        (``1e300``) is a typo, named by its key. Prismatic joints are checked only
+        against a ``prismatic_threshold`` given for them.
+        """
+        urdf = model.upperPositionLimit[self.q_index] - model.lowerPositionLimit[self.q_index]
+        kinds = [(REVOLUTE, "threshold", "rad")]
+        if prismatic:
+            kinds.append((PRISMATIC, "prismatic_threshold", "m"))
+        for kind, key, unit in kinds:
+            mine = np.array([k == kind for k in self.kinds], dtype=bool)
+            ranges = urdf[mine][np.isfinite(urdf[mine]) & (urdf[mine] > 0.0)]
+            if ranges.size and thr[mine].max() >= ranges.max():
+                raise InputError(
+                    f"constraints.joint_limits.{key}",
+                    f"a threshold smaller than a {kind} joint's range (the widest range is "
+                    f"{ranges.max():.6g} {unit}, this threshold {thr[mine].max():.6g} {unit})",
+                )
 
     def _take(self, q: np.ndarray) -> np.ndarray:
         """The limited joints' values [rad or m]."""
