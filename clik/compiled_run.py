@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from clik.constraints.constraint_run import finish_constraints
 from clik.engine import load
 from clik.stop_checks import instability_reason, joint_step_reason, non_finite_reason
 from clik.violations import ViolationRecord
@@ -24,9 +25,9 @@ if TYPE_CHECKING:
     from clik.reference_stream import ReferenceChunks
     from clik.result import TrackingResult
     from clik.robot import Robot
-    from clik.stop_checks import StopChecks
+    from clik.stop_checks import StopChecks, StopSettings
     from clik.task import Task
-    from clik.violations import ViolationMonitor
+    from clik.violations import JointRange, ViolationMonitor
 
 
 class RunState(Protocol):
@@ -99,18 +100,65 @@ def _rows(array: np.ndarray | None, a: int, b: int) -> np.ndarray | None:
 
 
 def _engine_run(run: RunState) -> Any:
-    """The engine's run, on the run's robot, task, law, checks and record."""
-    tr, task, s = run.tr, run.task, run.checks.s
-    joints = run.monitor.joints
-    return load().TrackingRun(
-        run.robot.model, task.frame_id, [int(r) for r in task.rows], task.has_position,
-        task.has_orientation, tr.law, tr.damping, tr.dt, tr.beta_max,
-        np.asarray(tr.K_task, dtype=float), tr.rows,
-        (s.deadlock_window, s.deadlock_ratio, s.deadlock_error, s.max_joint_step,
-         s.stall_window, s.stall_progress),
-        run.t, run.rec, [int(i) for i in joints.index], joints.lower, joints.upper,
-        list(joints.names), tr.constraints, tr.alpha,
+    """The engine's run, on the run's robot, task, law, checks and record (typed configs)."""
+    engine, tr = load(), run.tr
+    return engine.TrackingRun(
+        model=run.robot.model,
+        task=_task_config(engine, run.task),
+        law=_law_config(engine, tr),
+        stop=_stop_config(engine, run.checks.s),
+        t=run.t,
+        record=_record_arrays(engine, run.rec),
+        joints=_joint_monitor_config(engine, run.monitor.joints),
+        constraints=None if tr.constraints is None else tr.constraints.engine_config(),
+    )
+
+
+def _task_config(engine: Any, task: Task) -> Any:
+    """The task's frame and rows as ``_engine.TaskConfig``."""
+    return engine.TaskConfig(
+        frame=int(task.frame_id),
+        rows=[int(r) for r in task.rows],
+        has_position=bool(task.has_position),
+        has_orientation=bool(task.has_orientation),
+    )
+
+
+def _law_config(engine: Any, tr: Any) -> Any:
+    """The tracker's law, gains and rows as ``_engine.LawConfig``."""
+    return engine.LawConfig(
+        law=tr.law, damping=float(tr.damping), dt=float(tr.dt), beta_max=float(tr.beta_max),
+        K_task=np.asarray(tr.K_task, dtype=float), rows=int(tr.rows), alpha=float(tr.alpha),
     )  # fmt: skip
+
+
+def _stop_config(engine: Any, s: StopSettings) -> Any:
+    """The stop checks' settings as ``_engine.StopConfig``."""
+    return engine.StopConfig(
+        deadlock_window=s.deadlock_window, deadlock_ratio=s.deadlock_ratio,
+        deadlock_error=s.deadlock_error, max_joint_step=s.max_joint_step,
+        stall_window=s.stall_window, stall_progress=s.stall_progress,
+    )  # fmt: skip
+
+
+def _record_arrays(engine: Any, rec: Recorder) -> Any:
+    """The Recorder's own arrays (written in place) as ``_engine.RecordArrays``."""
+    return engine.RecordArrays(
+        N=rec.N, every=rec.every, idx=rec.idx, q=rec.q, qdot=rec.qdot, qddot=rec.qddot,
+        position=rec.position, reference=rec.reference, error=rec.error,
+        orientation_error=rec.orientation_error, active=rec.active, distance=rec.distance,
+        joint_min=rec.joint_min, joint_max=rec.joint_max, qdot_prev=rec._qdot_prev,
+    )  # fmt: skip
+
+
+def _joint_monitor_config(engine: Any, joints: JointRange) -> Any:
+    """The joint limits to stay in as ``_engine.JointMonitorConfig``."""
+    return engine.JointMonitorConfig(
+        index=[int(i) for i in joints.index],
+        lower=np.asarray(joints.lower, dtype=float),
+        upper=np.asarray(joints.upper, dtype=float),
+        names=list(joints.names),
+    )
 
 
 def _stopped(run: RunState, native: Any, stop: tuple[Any, ...]) -> tuple[str, str]:
@@ -166,25 +214,4 @@ class CompiledConstraints:
 
     def finish(self, result: TrackingResult, n_rec: int) -> None:
         """Move the run's records into the result, as ``ConstraintRun.finish`` does."""
-        cset, rec = self.cset, self.records
-        result.events = list(rec["events"])
-        result.info["constraint_names"] = list(rec["constraint_names"])
-        result.info["obstacles"] = cset.obstacle_info()
-        result.info["links"] = cset.link_labels
-        result.extra["active"] = rec["active"][:n_rec]
-        result.extra["witness"] = rec["witness"][:n_rec]
-        extra: dict[str, Any] = {
-            "min_obstacle_distance": rec["min_obstacle_distance"],
-            "min_obstacle_distance_by_obstacle": {},
-        }
-        if cset.obstacles:
-            result.extra["obstacle_distance"] = rec["obstacle_distance"][:n_rec]
-            result.extra["obstacle_link"] = rec["obstacle_link"][:n_rec]
-            for key in ("", "_link", "_exact", "_time"):
-                name = f"min_obstacle_distance{key}_by_obstacle"
-                extra[name] = dict(rec[name])
-        if cset.joint_limits is not None:
-            extra["joint_limits_used"] = cset.joint_limits_used()
-        if cset.dexterity is not None:
-            extra["dexterity_used"] = cset.dexterity_used()
-        result.info["summary_extra"] = extra
+        finish_constraints(self.cset, self.records, result, n_rec)

@@ -23,9 +23,10 @@ docs/method.md, "Solve mode with constraints". :func:`clik.solve` with
 
 The rows run on a copy of the constraint set whose thresholds are :data:`MARGIN` larger
 (and obstacle rows on even where the set only monitors obstacles), so that a pose held by
-a row sits just outside the threshold that is checked. Without joint-range rows the copy
-gets rows :data:`LIMIT_THRESHOLD` inside the robot's own limits, which the check holds
-every pose to.
+a row sits just outside the threshold that is checked (each kind makes its own copy,
+:meth:`~clik.constraints.kind.ConstraintKind.with_margin`). Without joint-range rows the
+copy gets rows :data:`~clik.constraints.joint_limits.ROBOT_LIMIT_ROWS` inside the robot's
+own limits, which the check holds every pose to.
 
 A failure names the constraint that blocks the target: the one the unconstrained pose
 misses by most (:attr:`~clik.solve_result.SolveResult.blocked_by`), and the rows active
@@ -34,10 +35,8 @@ at the end of the closest attempt.
 
 from __future__ import annotations
 
-import copy
 import math
 import time
-import warnings
 import weakref
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
@@ -45,14 +44,10 @@ from typing import Any
 
 import numpy as np
 
-from clik.constraints import (
-    ConstraintSet,
-    JointLimits,
-    NoCollisionGeometryWarning,
-    SkippedGeometryWarning,
-)
+from clik.constraints import ConstraintSet
+from clik.constraints.kind import Violation
 from clik.errors import InputError
-from clik.pose_check import PoseCheck, Violation, constraint_label
+from clik.pose_check import PoseCheck, constraint_label
 from clik.solve_result import SolveResult
 from clik.task import Task
 from clik.tracking import Tracker
@@ -60,10 +55,6 @@ from clik.trajectory import Hold
 
 MARGIN = 1e-5
 """Added to every threshold of the rows [m or rad]: a held row sits this far outside."""
-
-LIMIT_THRESHOLD = 1e-3
-"""Threshold [rad or m] of the rows keeping joints inside the robot's limits, when the
-constraint set has no joint-range rows of its own."""
 
 TRACK_DT = 1e-3
 """Sample time of the constrained law [s] (it sets only the stop checks' windows)."""
@@ -112,10 +103,10 @@ class _Attempt:
 class _Prepared:
     """What solves with one constraint set reuse: the check and the rows' copy."""
 
-    def __init__(self, cset: ConstraintSet, key: tuple[Any, ...]) -> None:
+    def __init__(self, cset: ConstraintSet, task: Task, key: tuple[Any, ...]) -> None:
         self.key = key
-        self.check = PoseCheck(cset)
-        self.rows = _rows_set(cset)
+        self.check = PoseCheck(cset, task)
+        self.rows = cset.with_margin(MARGIN)
 
 
 _PREPARED: dict[int, _Prepared] = {}
@@ -123,60 +114,15 @@ _PREPARED: dict[int, _Prepared] = {}
 while it runs and puts it back after, so solves in other threads build their own."""
 
 
-def _fingerprint(cset: ConstraintSet) -> tuple[Any, ...]:
-    """What the prepared copy depends on: a set changed since (moved obstacles) is redone."""
-    obstacles = tuple(
-        (o.name, o.position.tobytes(), o.rotation.tobytes(), id(o.geometry), float(thr))
-        for o, thr in zip(cset.obstacles, cset.obs_threshold, strict=True)
-    )
-    return (
-        id(cset.scene), id(cset.joint_limits), obstacles, cset.obstacle_threshold,
-        cset.form, cset.release_rule, cset.hysteresis, cset.max_active,
-        tuple(cset.gains.values()), cset.self_threshold, cset.monitor_margin,
-    )  # fmt: skip
-
-
-def _take(cset: ConstraintSet) -> _Prepared:
+def _take(cset: ConstraintSet, task: Task) -> _Prepared:
     """The prepared set for ``cset``, out of the cache (built when missing or stale)."""
-    key = _fingerprint(cset)
+    key = (cset.fingerprint(), id(task), task.frame_id, tuple(task.rows))
     prepared = _PREPARED.pop(id(cset), None)
     if prepared is None or prepared.key != key:
         if prepared is None:
             weakref.finalize(cset, _PREPARED.pop, id(cset), None)
-        prepared = _Prepared(cset, key)
+        prepared = _Prepared(cset, task, key)
     return prepared
-
-
-def _rows_set(cset: ConstraintSet) -> ConstraintSet:
-    """A copy of ``cset`` for the rows: thresholds ``+ MARGIN``, obstacle rows on."""
-    robot = cset.robot
-    obstacles = []
-    for obstacle, threshold in zip(cset.obstacles, cset.obs_threshold, strict=True):
-        moved_out = copy.copy(obstacle)
-        moved_out.threshold = float(threshold) + MARGIN
-        obstacles.append(moved_out)
-    thresholds = np.full(robot.nq, LIMIT_THRESHOLD)
-    override = None
-    jl = cset.joint_limits
-    if jl is not None:
-        thresholds[jl.q_index] = jl.threshold + MARGIN
-        override = {
-            name: {"lower": float(lo), "upper": float(hi)}
-            for name, lo, hi in zip(jl.joint_names, jl.lower, jl.upper, strict=True)
-        }
-    with warnings.catch_warnings():  # the user's set has warned about its geometry already
-        warnings.simplefilter("ignore", NoCollisionGeometryWarning)
-        warnings.simplefilter("ignore", SkippedGeometryWarning)
-        return ConstraintSet(
-            robot, obstacles=obstacles, obstacle_rows=True,
-            obstacle_threshold=cset.obstacle_threshold + MARGIN,
-            obstacle_gain=cset.gains["obstacle"], form=cset.form, links=cset._links,
-            joint_limits=JointLimits(robot, thresholds, override),
-            joint_gain=cset.gains["joint"], self_collision=cset._self_collision,
-            self_threshold=cset.self_threshold + MARGIN, self_gain=cset.gains["self"],
-            release=cset.release_rule, hysteresis=cset.hysteresis,
-            max_active=cset.max_active, monitor_margin=cset.monitor_margin,
-        )  # fmt: skip
 
 
 class _ConstrainedLaw:
@@ -314,7 +260,7 @@ def solve_constrained(
     """
     _check_constraints(task, constraints, tracking_attempts)
     start = time.perf_counter()
-    prepared = _take(constraints)
+    prepared = _take(constraints, task)
     try:
         first = unconstrained(q0)
         if not first.success:

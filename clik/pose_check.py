@@ -7,7 +7,9 @@ A configuration ``q`` *satisfies* a :class:`~clik.constraints.ConstraintSet` whe
 - with self-collision rows, every checked link pair is at least its threshold apart;
 - every joint is inside the robot's limits and, with joint-range rows (16)-(19), at
   least ``d_q`` from each limit of the constraint (the tighter of the robot's and the
-  override): the error (17) ``e_q = d_q - d`` is not positive.
+  override): the error (17) ``e_q = d_q - d`` is not positive;
+- with a dexterity row, the task's manipulability is at least ``w_min`` (D1)-(D2);
+- and so for every kind of the set: each kind checks its own rows' errors.
 
 Distances are computed by coal (``pinocchio.computeDistances``) on the constraint set's
 own link geometry, the convex hulls of the links' collision meshes: a hull contains its
@@ -19,40 +21,18 @@ on the pose it returns.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 
 from clik.constraints.collision_scene import GJK_TOLERANCE
+from clik.constraints.kind import CHECK_TOLERANCE, Violation
 from clik.robot import PRISMATIC, REVOLUTE, joint_kind
 
 if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
-
-CHECK_TOLERANCE = 1e-12
-"""Accepted shortfall of a distance below its threshold [m or rad] (rounding only)."""
-
-
-@dataclass(frozen=True)
-class Violation:
-    """One constraint that ``q`` does not satisfy.
-
-    Attributes:
-        constraint: The constraint in words: ``"obstacle 'table'"``,
-            ``"joint range of panda_joint4"`` or ``"link pair panda_link2-panda_link6"``.
-        detail: Where and by how much, with units.
-        shortfall: How far inside the threshold [m or rad], > 0.
-    """
-
-    constraint: str
-    detail: str
-    shortfall: float
-
-    def describe(self) -> str:
-        """``"obstacle 'table' blocks: link panda_link7 at 0.012 m < threshold 0.05 m"``."""
-        return f"{self.constraint} blocks: {self.detail}"
+    from clik.task import Task
 
 
 def constraint_label(key: str) -> str:
@@ -69,12 +49,17 @@ def constraint_label(key: str) -> str:
 class PoseCheck:
     """Checks configurations against one constraint set (its own Pinocchio and coal data).
 
+    The robot's own joint limits are checked here; every kind of the set checks its own
+    constraints (:meth:`~clik.constraints.kind.ConstraintKind.check`), reading the
+    distances and the task Jacobian this checker computes once per configuration.
+
     Args:
         cset: The constraints. Its obstacles must be at rest (solve mode has no time).
+        task: The task (kinds that check the task's rows need it: dexterity), or None.
     """
 
-    def __init__(self, cset: ConstraintSet) -> None:
-        self.cset = cset
+    def __init__(self, cset: ConstraintSet, task: Task | None = None) -> None:
+        self.cset, self.task = cset, task
         robot = cset.robot
         self.model = robot.model
         self.data = robot.model.createData()
@@ -92,12 +77,14 @@ class PoseCheck:
             and math.isfinite(robot.upper[joint.idx_q])
         ]
         self.lower, self.upper = robot.lower, robot.upper
+        self._measured: bytes | None = None
 
     def violations(self, q: np.ndarray) -> list[Violation]:
         """Every constraint ``q`` does not satisfy, the largest shortfall first."""
-        found = self._joints(q)
-        if self.gdata is not None:
-            found += self._distances(q)
+        self._measured = None
+        found = self._robot_limits(q)
+        for kind in self.cset.kinds:
+            found += kind.check(self, q)
         return sorted(found, key=lambda v: -v.shortfall)
 
     def worst(self, q: np.ndarray) -> Violation | None:
@@ -105,8 +92,26 @@ class PoseCheck:
         found = self.violations(q)
         return found[0] if found else None
 
-    def _joints(self, q: np.ndarray) -> list[Violation]:
-        """Joints outside the robot's limits, or inside a joint-range row's band (17)."""
+    def distances(self, q: np.ndarray) -> Any:
+        """Coal's distance results of every pair of the scene at ``q`` (computed once per q)."""
+        assert self.scene is not None and self.gdata is not None
+        key = np.asarray(q, dtype=float).tobytes()
+        if self._measured != key:
+            pin.computeDistances(self.model, self.data, self.scene.gmodel, self.gdata, q)
+            self._measured = key
+        return self.gdata.distanceResults
+
+    def frame_placement(self, q: np.ndarray, frame_id: int) -> pin.SE3:
+        """A frame's placement in the world at ``q`` (this checker's own data)."""
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return self.data.oMf[frame_id]
+
+    def task_jacobian(self, q: np.ndarray) -> np.ndarray | None:
+        """The task's Jacobian (m, nv) at ``q`` (3), or None without a task."""
+        return None if self.task is None else self.task.jacobian(q)
+
+    def _robot_limits(self, q: np.ndarray) -> list[Violation]:
+        """Joints outside the robot's own limits."""
         out: list[Violation] = []
         for name, i in self.limited:
             below, above = self.lower[i] - q[i], q[i] - self.upper[i]
@@ -114,45 +119,4 @@ class PoseCheck:
                 side, limit = ("lower", self.lower[i]) if below > 0 else ("upper", self.upper[i])
                 detail = f"{name} = {q[i]:.6g} beyond its {side} limit {limit:.6g}"
                 out.append(Violation(f"joint range of {name}", detail, float(max(below, above))))
-        jl = self.cset.joint_limits
-        if jl is None:
-            return out
-        qi = q[jl.q_index]
-        for k, name in enumerate(jl.joint_names):
-            unit, thr = jl.units[k], float(jl.threshold[k])
-            for side, d in (("lower", qi[k] - jl.lower[k]), ("upper", jl.upper[k] - qi[k])):
-                if thr - d <= CHECK_TOLERANCE:
-                    continue
-                limit = jl.lower[k] if side == "lower" else jl.upper[k]
-                where = f"{-d:.4g} {unit} beyond" if d < 0 else f"{d:.4g} {unit} from"
-                detail = (
-                    f"{name} = {qi[k]:.6g} {unit}, {where} its {side} limit {limit:.6g} {unit} "
-                    f"(threshold {thr:.4g} {unit})"
-                )
-                out.append(Violation(f"joint range of {name}", detail, float(thr - d)))
-        return out
-
-    def _distances(self, q: np.ndarray) -> list[Violation]:
-        """Link-obstacle pairs nearer than the obstacle's ``d_o`` (13), link pairs too near."""
-        scene, cset, gdata = self.scene, self.cset, self.gdata
-        assert scene is not None and gdata is not None
-        pin.computeDistances(self.model, self.data, scene.gmodel, gdata, q)
-        results = gdata.distanceResults
-        out: list[Violation] = []
-        for o, obstacle in enumerate(cset.obstacles):
-            thr = float(cset.obs_threshold[o])
-            column = [results[int(p)].min_distance for p in scene.obstacle_pairs[:, o]]
-            if not column:
-                continue
-            i = int(np.argmin(column))
-            d = float(column[i])
-            if thr - d > CHECK_TOLERANCE or not math.isfinite(d):
-                detail = f"link {cset.link_labels[i]} at {d:.4g} m < threshold {thr:.4g} m"
-                out.append(Violation(f"obstacle {obstacle.name!r}", detail, thr - d))
-        for pair, a, b in scene.self_pairs:
-            d = float(results[pair].min_distance)
-            if cset.self_threshold - d > CHECK_TOLERANCE:
-                label = f"{cset.link_labels[a]}-{cset.link_labels[b]}"
-                detail = f"{d:.4g} m apart < threshold {cset.self_threshold:.4g} m"
-                out.append(Violation(f"link pair {label}", detail, cset.self_threshold - d))
         return out

@@ -143,9 +143,7 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
             Table({}, scenario.file, "solver"), scenario.solver["dt"], float(trajectory.duration)
         )
     constraints = None
-    if scenario.obstacles or any(
-        c.get("enabled") for c in scenario.constraints.values() if isinstance(c, dict)
-    ):
+    if scenario.has_constraints:
         from clik.constraints.build import build_constraints
 
         constraints = build_constraints(scenario, robot, task)

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from clik.bounds import MAX_STEPS, SCALE_RANGE
+from clik.constraints.registry import TABLE_KINDS
 from clik.engine import ENGINES
 from clik.errors import ClikError, ScenarioError
 from clik.robot import JointValues
@@ -100,6 +101,16 @@ class Scenario:
     def folder(self) -> Path:
         """Folder that relative paths resolve against."""
         return self.file.parent
+
+    @property
+    def has_constraints(self) -> bool:
+        """Whether the run needs a constraint set: obstacles, an enabled table, or a kind's."""
+        tables = self.constraints.values()
+        return bool(
+            self.obstacles
+            or any(c.get("enabled") for c in tables if isinstance(c, dict))
+            or any(self.constraints.get("kinds", {}).values())
+        )
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -399,6 +410,11 @@ def _constraints(ct: Table, dt: float) -> dict[str, Any]:
     }
     sc.done()
     out["dexterity"] = _dexterity(ct.table("dexterity"), dt)
+    out["kinds"] = {
+        kind.table: [kind.read_table(t, dt) for t in ct.tables(kind.table)]
+        for kind in TABLE_KINDS
+        if kind.table is not None
+    }
     out["velocity_limits"] = _velocity_limits(ct.table("velocity_limits"))
     out["release"] = ct.string("release", "projection", ("projection", "sign"))
     out["hysteresis"] = ct.number("hysteresis", 0.0, minimum=0.0, bound=MAX_LENGTH)

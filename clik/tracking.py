@@ -270,7 +270,7 @@ class Tracker:
         if self.law == "pseudoinverse":
             gains = [self.alpha]
             if self.constraints is not None:
-                gains += [g for g in self.constraints.gains.values() if g is not None]
+                gains += [k.gain for k in self.constraints.kinds if k.gain is not None]
             kdt = max(gains) * self.dt
             if kdt >= 2.0:
                 warnings.warn(
@@ -399,17 +399,12 @@ class _Run:
         )
 
     def observe_limits(self, tk: float, q: np.ndarray) -> None:
-        """Record every limit crossed at this sample: joints, obstacle surfaces, link pairs."""
+        """Record every limit crossed at this sample: joints, and what each kind guards."""
         self.monitor.observe_joints(tk, q)
         crun = self.crun
         if crun is None:
             return
-        if crun.min_distance < 0.0:  # a penetrating pair is always evaluated: exact
-            for o in np.flatnonzero(crun.dist_o < 0.0):
-                key = crun.cset.pair_names[int(crun.link_o[o])][o]
-                self.monitor.observe_penetration(tk, key, float(crun.dist_o[o]))
-        for key, dist in crun.self_penetrations:
-            self.monitor.observe_penetration(tk, key, dist)
+        crun.observe_limits(tk, self.monitor)
 
     def record(self, k: int, q: np.ndarray, qdot: np.ndarray, p_d: np.ndarray | None,
                err: float, err_rot: float, r: int) -> None:  # fmt: skip
@@ -585,11 +580,7 @@ class _Run:
 
 def _joint_range(robot: Robot, cset: ConstraintSet | None) -> JointRange:
     """The robot's limits, tightened by the joint-range constraint's where it has one."""
-    jl = None if cset is None else cset.joint_limits
-    if jl is None:
-        return JointRange(robot)
-    tighter = zip(jl.joint_names, jl.lower, jl.upper, strict=True)
-    return JointRange(robot, {name: (float(lo), float(hi)) for name, lo, hi in tighter})
+    return JointRange(robot, None if cset is None else cset.joint_ranges())
 
 
 LWA = pin.LOCAL_WORLD_ALIGNED

@@ -54,6 +54,10 @@ class ViolationRecord:
         )
         if self.kind == "joint":
             return f"{self.constraint} crossed by {self.worst:.4g} {when}"
+        if self.kind == "length":
+            return f"{self.constraint} crossed by {self.worst * 1000:.3g} mm {when}"
+        if self.kind == "angle":
+            return f"{self.constraint} crossed by {math.degrees(self.worst):.3g} deg {when}"
         return f"{self.constraint} penetrated {self.worst * 1000:.3g} mm deep {when}"
 
 
@@ -124,6 +128,13 @@ class ViolationMonitor:
         """Record a signed distance below zero [m] (an obstacle or a link pair)."""
         self._note(key, "obstacle", t, -distance)
 
+    def observe_excursion(self, t: float, key: str, kind: str, excess: float) -> None:
+        """Record a limit crossed by ``excess`` > 0 [m or rad] (a wall, a cone's surface).
+
+        ``kind`` says the unit: ``"length"`` [m] or ``"angle"`` [rad].
+        """
+        self._note(key, kind, t, excess)
+
     def _note(self, key: str, kind: str, t: float, excess: float) -> None:
         rec = self.records.get(key)
         if rec is None:
@@ -137,7 +148,7 @@ class ViolationMonitor:
         return [r.as_dict() for r in sorted(self.records.values(), key=lambda r: r.t_first)]
 
     def worst(self) -> ViolationRecord | None:
-        """The deepest penetration if any, else the largest joint excursion."""
+        """The deepest penetration if any, else the largest excursion."""
         if not self.records:
             return None
-        return max(self.records.values(), key=lambda r: (r.kind != "joint", r.worst))
+        return max(self.records.values(), key=lambda r: (r.kind == "obstacle", r.worst))

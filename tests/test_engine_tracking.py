@@ -264,7 +264,7 @@ def scenario_runs(name, row_gain=..., **solver):
 
     run = build(scenario_path(name))
     if row_gain is not ...:
-        run.tracker.constraints.gains["dexterity"] = row_gain
+        run.tracker.constraints.dexterity.gain = row_gain
     if solver:
         tr = run.tracker
         run.tracker = clik.Tracker(

@@ -240,6 +240,7 @@ class TestLegend:
             palette.OBSTACLE_SHELL,
             palette.ROW_ACTIVE,
             palette.MONITOR_NEAR,
+            palette.REGION,
             palette.MONITOR_CLEAR,
             palette.JOINT_LIMIT_ACTIVE,
             palette.JOINT_LIMIT_NEAR,

@@ -6,8 +6,13 @@ Jacobian row ``j_c`` and a feed-forward term ``f_c`` such that
 ``edot_c = f_c - j_c qdot``. The law then runs on ``J_e = (J; j_c ...)`` and
 ``e_e = (e; e_c ...)``.
 
-- :class:`Obstacle`: convex obstacles (sphere, box, capsule, cylinder, mesh hull).
+A kind of row is one class (:class:`ConstraintKind`, :mod:`clik.constraints.kind`)
+and one C++ type; the core (:class:`ConstraintRun`) never names a kind:
+
 - :class:`JointLimits`: joint-range rows, eqs. (16)-(19).
+- :class:`ObstacleAvoidance`: link-obstacle rows, eqs. (13)-(15), on
+  :class:`Obstacle` (sphere, box, capsule, cylinder, mesh hull).
+- :class:`LinkPairs`: link-link rows (self-collision).
 - :class:`Dexterity`: the dexterity row, ``w(q) >= w_min`` on the task's
   manipulability (D1)-(D3) (clik's addition; the paper's future work).
 - :func:`obstacle_row`: obstacle rows, eqs. (13)-(15), in the paper's squared form
@@ -21,22 +26,32 @@ from clik.constraints.collision_scene import (
     NoCollisionGeometryWarning,
     SkippedGeometryWarning,
 )
+from clik.constraints.constraint_run import ConstraintRun
 from clik.constraints.constraint_set import RELEASE_RULES, ConstraintSet
 from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits
+from clik.constraints.kind import Candidate, ConstraintKind, KindRun
+from clik.constraints.link_pairs import LinkPairs
 from clik.constraints.obstacle import SHAPES, Obstacle
+from clik.constraints.obstacle_avoidance import ObstacleAvoidance
 from clik.constraints.obstacle_rows import FORMS, obstacle_row, point_jacobian
 
 __all__ = [
     "FORMS",
     "RELEASE_RULES",
     "SHAPES",
+    "Candidate",
     "CollisionScene",
+    "ConstraintKind",
+    "ConstraintRun",
     "ConstraintSet",
     "Dexterity",
     "JointLimits",
+    "KindRun",
+    "LinkPairs",
     "NoCollisionGeometryWarning",
     "Obstacle",
+    "ObstacleAvoidance",
     "SkippedGeometryWarning",
     "obstacle_row",
     "point_jacobian",

@@ -7,8 +7,17 @@ from typing import TYPE_CHECKING, Any
 from clik.constraints.constraint_set import ConstraintSet
 from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits, convert_override
+from clik.constraints.kind import ConstraintKind
 from clik.constraints.obstacle import Obstacle
-from clik.errors import ClikError, GeometryError, InputError, JointNotFound, ScenarioError
+from clik.constraints.registry import TABLE_KINDS
+from clik.errors import (
+    ClikError,
+    FrameNotFound,
+    GeometryError,
+    InputError,
+    JointNotFound,
+    ScenarioError,
+)
 
 if TYPE_CHECKING:
     from clik.robot import Robot
@@ -69,6 +78,7 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
         if not jl_spec["enabled"]:
             joint_limits = None
     dx_spec = c.get("dexterity") or {"enabled": False, "gain": None}
+    kinds = _table_kinds(scenario, robot)
     release = obs["release"] or c["release"]
     try:
         return ConstraintSet(
@@ -86,6 +96,7 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
             self_gain=sc["gain"],
             dexterity=_dexterity(scenario, dx_spec),
             dexterity_gain=dx_spec["gain"],
+            kinds=kinds,
             release=release,
             hysteresis=c["hysteresis"],
             max_active=c["max_active"],
@@ -102,3 +113,21 @@ def _dexterity(scenario: Scenario, spec: dict[str, Any]) -> Dexterity | None:
         return Dexterity(spec["threshold"])
     except InputError as exc:
         raise ScenarioError(scenario.file, exc.field, str(exc)) from None
+
+
+def _table_kinds(scenario: Scenario, robot: Robot) -> list[ConstraintKind]:
+    """The ``[[constraints.<table>]]`` kinds (:data:`~clik.constraints.registry.TABLE_KINDS`)."""
+    out: list[ConstraintKind] = []
+    tables = scenario.constraints.get("kinds", {})
+    for kind in TABLE_KINDS:
+        for i, spec in enumerate(tables.get(kind.table, [])):
+            where = f"constraints.{kind.table}[{i}]"
+            try:
+                out.append(kind.from_spec(robot, spec))
+            except FrameNotFound as exc:
+                raise ScenarioError(scenario.file, f"{where}.frame", str(exc)) from None
+            except InputError as exc:
+                field = exc.field.replace(f"constraints.{kind.table}", where, 1)
+                message = str(exc).removeprefix(f"{exc.field}: ")
+                raise ScenarioError(scenario.file, field, message) from None
+    return out

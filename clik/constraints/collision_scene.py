@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import coal
 import numpy as np
@@ -61,6 +61,7 @@ class CollisionScene:
         link_joint: Parent joint index of each link geometry.
         obstacle_pairs: Pair index of (link geometry i, obstacle o), array (n_links, n_obs).
         self_pairs: List of (pair index, link geometry a, link geometry b).
+        link_labels: Name of each link geometry in constraint names.
     """
 
     def __init__(
@@ -104,6 +105,14 @@ class CollisionScene:
             # Warm start: GJK begins where the pair's last query ended (samples are close).
             request.gjk_initial_guess = coal.GJKInitialGuess.CachedGuess
         self._joint_pos = np.zeros((len(self.joints), 3))
+        counts: dict[str, int] = {}
+        for link in self.link_names:
+            counts[link] = counts.get(link, 0) + 1
+        self.link_labels = [
+            link if counts[link] == 1 else gmodel.geometryObjects[i].name
+            for i, link in enumerate(self.link_names)
+        ]
+        """Per link geometry: its link's name, or the geometry's where a link has several."""
 
     def _add_links(self, gmodel: pin.GeometryModel, links: Sequence[str] | None) -> None:
         """Each link collision geometry as a convex shape on its joint (a bad one is skipped)."""
@@ -272,6 +281,22 @@ class CollisionScene:
         self.obstacles[o] = obstacle
         self.gmodel.geometryObjects[self.obstacle_geom[o]].placement = obstacle.placement()
         self._moving = [i for i, ob in enumerate(self.obstacles) if ob.moving]
+
+    def engine_config(self) -> Any:
+        """The scene as the compiled engine's ``SceneConfig`` (the GeometryModel borrowed)."""
+        from clik.engine import load
+
+        return load().SceneConfig(
+            gmodel=self.gmodel,
+            n_links=int(self.n_links),
+            link_joint=[int(j) for j in self.link_joint],
+            local_radius=np.asarray(self.local_radius, dtype=float),
+            obstacle_pairs=np.asarray(self.obstacle_pairs, dtype=np.int32).reshape(
+                self.n_links, len(self.obstacles)
+            ),
+            self_pairs=[(int(p), int(a), int(b)) for p, a, b in self.self_pairs],
+            link_labels=list(self.link_labels),
+        )
 
     def distance(self, pair: int) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
         """Signed distance of a pair, its witness points (first on the link) and the normal."""

@@ -13,17 +13,24 @@ number of trackers and runs.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 import pinocchio as pin
 
-from clik.constraints.collision_scene import CollisionScene
+from clik.constraints.collision_scene import (
+    CollisionScene,
+    NoCollisionGeometryWarning,
+    SkippedGeometryWarning,
+)
 from clik.constraints.dexterity import Dexterity
-from clik.constraints.joint_limits import JointLimits
+from clik.constraints.joint_limits import JointLimits, robot_limit_rows
+from clik.constraints.kind import ConstraintKind
+from clik.constraints.link_pairs import LinkPairs
 from clik.constraints.obstacle import Obstacle
-from clik.constraints.obstacle_rows import FORMS
+from clik.constraints.obstacle_avoidance import ObstacleAvoidance
 from clik.errors import InputError
 
 if TYPE_CHECKING:
@@ -51,6 +58,9 @@ class ConstraintSet:
         dexterity: The dexterity row (:class:`Dexterity`, ``w >= w_min`` on the task's
             manipulability, (D1)-(D3)), or None.
         dexterity_gain: Gain of the dexterity row [1/s]; None: default of the law.
+        kinds: Further kinds of rows (:class:`~clik.constraints.kind.ConstraintKind`:
+            workspace boxes, tool cones, ...), each with its own gain; their rows
+            follow the ones above.
         release: ``"projection"`` (default) or ``"sign"``.
         hysteresis: With the sign rule, release only when the error is below
             ``-hysteresis * threshold``.
@@ -86,13 +96,12 @@ class ConstraintSet:
         self_gain: float | None = None,
         dexterity: Dexterity | None = None,
         dexterity_gain: float | None = None,
+        kinds: Sequence[ConstraintKind] = (),
         release: str = "projection",
         hysteresis: float = 0.0,
         max_active: int | None = None,
         monitor_margin: float = 0.1,
     ) -> None:
-        if form not in FORMS:
-            raise InputError("constraints.obstacles.form", "'normalized' or 'squared'", form)
         if release not in RELEASE_RULES:
             raise InputError("constraints.release", "'projection' or 'sign'", release)
         for field, value in (
@@ -112,29 +121,91 @@ class ConstraintSet:
                 raise InputError(f"constraints.{field}", "a positive gain [1/s]", gain)
         if dexterity is not None and not isinstance(dexterity, Dexterity):
             raise InputError("constraints.dexterity", "a Dexterity(threshold=...)", dexterity)
+        if joint_limits is not None and not isinstance(joint_limits, JointLimits):
+            raise InputError("constraints.joint_limits", "a JointLimits(robot, ...)", joint_limits)
+        for i, kind in enumerate(kinds):
+            if not isinstance(kind, ConstraintKind) or isinstance(
+                kind, (JointLimits, Dexterity, ObstacleAvoidance, LinkPairs)
+            ):
+                raise InputError(
+                    f"constraints.kinds[{i}]",
+                    "a constraint kind (Workspace, Cone, ...); joint ranges, obstacles, link "
+                    "pairs and dexterity have their own keywords",
+                    kind,
+                )
         if not (math.isfinite(hysteresis) and hysteresis >= 0):
             raise InputError("constraints.hysteresis", "a number >= 0", hysteresis)
+        own: list[ConstraintKind] = []
+        if joint_limits is not None:
+            own.append(_with_gain(joint_limits, joint_gain))
+        own.append(
+            ObstacleAvoidance(obstacles, obstacle_rows, obstacle_threshold, form, obstacle_gain)
+        )
+        if self_collision:
+            own.append(LinkPairs(self_threshold, self_gain))
+        if dexterity is not None:
+            own.append(_with_gain(dexterity, dexterity_gain))
+        self._setup(
+            robot, own + list(kinds), links, release, hysteresis, max_active, monitor_margin
+        )
+
+    def _setup(
+        self,
+        robot: Robot,
+        kinds: list[ConstraintKind],
+        links: Sequence[str] | None,
+        release: str,
+        hysteresis: float,
+        max_active: int | None,
+        monitor_margin: float,
+    ) -> None:
         self.robot = robot
-        self.obstacles = list(obstacles)
-        self.obstacle_rows = obstacle_rows
-        self.obstacle_threshold = float(obstacle_threshold)
-        self.gains = {
-            "obstacle": obstacle_gain,
-            "joint": joint_gain,
-            "self": self_gain,
-            "dexterity": dexterity_gain,
-        }
-        self.form = form
-        self.joint_limits = joint_limits
-        self.dexterity = dexterity
-        self.self_threshold = float(self_threshold)
+        self.kinds: tuple[ConstraintKind, ...] = tuple(kinds)
+        """The set's kinds of rows, in the order their rows are evaluated and named."""
         self.release_rule = release
         self.hysteresis = float(hysteresis)
         self.max_active = max_active
         self.monitor_margin = float(monitor_margin)
         self._links = links
-        self._self_collision = self_collision
-        self.set_obstacles(self.obstacles)
+        self._obstacle_kind = next(k for k in kinds if isinstance(k, ObstacleAvoidance))
+        self._self_collision = any(isinstance(k, LinkPairs) for k in kinds)
+        self._build_scene()
+
+    def _build_scene(self) -> None:
+        obstacles = self._obstacle_kind.obstacles
+        need_scene = bool(obstacles) or self._self_collision
+        self.scene = (
+            CollisionScene(self.robot, obstacles, self._links, self._self_collision)
+            if need_scene
+            else None
+        )
+
+    def with_margin(self, margin: float) -> ConstraintSet:
+        """A new set whose rows hold ``margin`` beyond every threshold (solve mode's rows).
+
+        Every kind gives its own copy (:meth:`ConstraintKind.with_margin`); without
+        joint-range rows, rows :data:`~clik.constraints.joint_limits.ROBOT_LIMIT_ROWS`
+        inside the robot's own limits keep the joints there.
+        """
+        kinds = [k.with_margin(margin) for k in self.kinds]
+        if not any(getattr(k, "covers_robot_limits", False) for k in kinds):
+            kinds.insert(0, robot_limit_rows(self.robot))
+        out = ConstraintSet.__new__(ConstraintSet)
+        with warnings.catch_warnings():  # this set has warned about its geometry already
+            warnings.simplefilter("ignore", NoCollisionGeometryWarning)
+            warnings.simplefilter("ignore", SkippedGeometryWarning)
+            out._setup(
+                self.robot, kinds, self._links, self.release_rule, self.hysteresis,
+                self.max_active, self.monitor_margin,
+            )  # fmt: skip
+        return out
+
+    def fingerprint(self) -> tuple[Any, ...]:
+        """What a prepared solve depends on: a set changed since is prepared again."""
+        return (
+            id(self.scene), self.release_rule, self.hysteresis, self.max_active,
+            self.monitor_margin, tuple(k.fingerprint() for k in self.kinds),
+        )  # fmt: skip
 
     # -- obstacles between runs ----------------------------------------------------------
 
@@ -143,18 +214,11 @@ class ConstraintSet:
 
         The link hulls are computed once per robot; only the collision pairs are rebuilt.
         """
-        obstacles = list(obstacles)
-        names = [o.name for o in obstacles]
-        if len(set(names)) != len(names):
-            raise InputError("obstacles", "distinct obstacle names", names)
-        self.obstacles = obstacles
-        need_scene = bool(obstacles) or self._self_collision
-        self.scene = (
-            CollisionScene(self.robot, obstacles, self._links, self._self_collision)
-            if need_scene
-            else None
-        )
-        self._setup_scene()
+        old = self._obstacle_kind
+        new = ObstacleAvoidance(obstacles, old.rows, old.threshold, old.form, old.gain)
+        self.kinds = tuple(new if k is old else k for k in self.kinds)
+        self._obstacle_kind = new
+        self._build_scene()
 
     def move_obstacle(
         self,
@@ -179,49 +243,92 @@ class ConstraintSet:
             moved.rotation = pin.rpy.rpyToMatrix(*moved.rpy)
         if velocity is not None:
             moved.velocity = np.array(velocity, dtype=float)
-        self.obstacles[i] = moved
+        self._obstacle_kind.moved(i, moved)
         assert self.scene is not None
         self.scene.replace_obstacle(i, moved)
-        self.obs_vel[i] = moved.velocity
 
-    # -- set-up ------------------------------------------------------------------------
+    # -- what the kinds say, read whole ----------------------------------------------------
 
-    def _setup_scene(self) -> None:
+    def _kind(self, cls: type[K]) -> K | None:
+        return next((k for k in self.kinds if isinstance(k, cls)), None)
+
+    @property
+    def obstacles(self) -> list[Obstacle]:
+        """The obstacles (always monitored); change them with :meth:`set_obstacles`."""
+        return self._obstacle_kind.obstacles
+
+    @property
+    def obstacle_rows(self) -> bool:
+        """Whether obstacle rows may enter the task."""
+        return self._obstacle_kind.rows
+
+    @property
+    def obstacle_threshold(self) -> float:
+        """Default ``d_o`` [m]."""
+        return self._obstacle_kind.threshold
+
+    @property
+    def form(self) -> str:
+        """The obstacle rows' form."""
+        return self._obstacle_kind.form
+
+    @property
+    def obs_threshold(self) -> np.ndarray:
+        """``d_o`` per obstacle [m]."""
+        return self._obstacle_kind.thresholds
+
+    @property
+    def obs_vel(self) -> np.ndarray:
+        """Velocity per obstacle (n_obs, 3) [m/s]."""
+        return self._obstacle_kind.velocities
+
+    @property
+    def joint_limits(self) -> JointLimits | None:
+        """The joint-range rows, or None."""
+        return self._kind(JointLimits)
+
+    @property
+    def dexterity(self) -> Dexterity | None:
+        """The dexterity row, or None."""
+        return self._kind(Dexterity)
+
+    @property
+    def self_threshold(self) -> float:
+        """Threshold of link pairs [m] (the default without self-collision rows)."""
+        pairs = self._kind(LinkPairs)
+        return 0.01 if pairs is None else pairs.threshold
+
+    @property
+    def gains(self) -> dict[str, float | None]:
+        """Each kind's gain by kind name (None: the law's default)."""
+        out: dict[str, float | None] = dict.fromkeys(("obstacle", "joint", "self", "dexterity"))
+        for k in reversed(self.kinds):  # the first kind of a name wins
+            out[k.name] = k.gain
+        return out
+
+    @property
+    def link_labels(self) -> list[str]:
+        """Per link geometry, its name in constraint names."""
+        return [] if self.scene is None else list(self.scene.link_labels)
+
+    @property
+    def immovable_pairs(self) -> set[str]:
+        """Constraints no joint motion changes (a link geometry on the fixed base)."""
+        out: set[str] = set()
         scene = self.scene
-        n_obs = len(self.obstacles)
-        self.obs_threshold = np.array(
-            [
-                o.threshold if o.threshold is not None else self.obstacle_threshold
-                for o in self.obstacles
-            ]
-        )
-        self.obs_vel = np.array([o.velocity for o in self.obstacles]).reshape(n_obs, 3)
         if scene is None:
-            self.link_labels: list[str] = []
-            self.immovable_pairs: set[str] = set()
-            return
-        counts: dict[str, int] = {}
-        for link in scene.link_names:
-            counts[link] = counts.get(link, 0) + 1
-        geoms = scene.gmodel.geometryObjects
-        self.link_labels = [
-            link if counts[link] == 1 else geoms[i].name for i, link in enumerate(scene.link_names)
-        ]
-        self.pair_names = [
-            [f"obstacle:{o.name}:{label}" for o in self.obstacles] for label in self.link_labels
-        ]
-        self.immovable_pairs = {  # a geometry on the fixed base: its distance never changes
-            name
-            for names, joint in zip(self.pair_names, scene.link_joint, strict=True)
-            if joint == 0
-            for name in names
-        }
-        if scene.self_pairs:
-            sp = np.array([(a, b) for _, a, b in scene.self_pairs])
-            self.self_slots = (scene.link_slot[sp[:, 0]], scene.link_slot[sp[:, 1]])
-        self.rho = scene.motion_bounds()
-        self.thr_matrix = np.broadcast_to(self.obs_threshold, (scene.n_links, n_obs)).copy()
-        self.margin = self.obs_threshold + self.monitor_margin
+            return out
+        for label, joint in zip(scene.link_labels, scene.link_joint, strict=True):
+            if joint == 0:
+                out.update(f"obstacle:{o.name}:{label}" for o in self.obstacles)
+        return out
+
+    def joint_ranges(self) -> dict[str, tuple[float, float]]:
+        """Joint limits tighter than the robot's, from the kinds (violations)."""
+        out: dict[str, tuple[float, float]] = {}
+        for k in self.kinds:
+            out.update(k.joint_ranges())
+        return out
 
     def row_limit(self, m: int, law: str) -> int:
         """The bound on active rows for a task of ``m`` rows under ``law``.
@@ -237,9 +344,7 @@ class ConstraintSet:
         nv = self.robot.nv
         free = nv if law == "pseudoinverse" else nv - m
         limit = free if self.max_active is None else min(int(self.max_active), free)
-        rows_wanted = (
-            self.obstacle_rows or self.joint_limits is not None or self.dexterity is not None
-        )
+        rows_wanted = any(k.wants_rows for k in self.kinds)
         if limit <= 0 and rows_wanted:
             raise InputError(
                 "constraints",
@@ -251,34 +356,33 @@ class ConstraintSet:
 
     def obstacle_info(self) -> list[dict[str, Any]]:
         """Each obstacle as a run's ``info["obstacles"]`` lists it (threshold included)."""
-        return [
-            {
-                "name": o.name,
-                "shape": o.shape,
-                "position": o.position.tolist(),
-                "rpy": o.rpy.tolist(),
-                "velocity": o.velocity.tolist(),
-                "threshold": float(self.obs_threshold[i]),
-                **o.params,
-            }
-            for i, o in enumerate(self.obstacles)
-        ]
+        return self._obstacle_kind.info()
 
-    def dexterity_used(self) -> dict[str, Any] | None:
-        """The dexterity row's settings, as a run's summary reports them (None: no row)."""
-        if self.dexterity is None:
-            return None
-        return {"threshold": self.dexterity.threshold, "gain": self.gains["dexterity"]}
+    def engine_config(self) -> Any:
+        """The set as the compiled engine's typed ``ConstraintSetConfig``.
 
-    def joint_limits_used(self) -> dict[str, Any] | None:
-        """The joint-range rows' limits and thresholds, as a run's summary reports them."""
-        jl = self.joint_limits
-        if jl is None:
-            return None
-        return {
-            "lower": jl.lower.tolist(),
-            "upper": jl.upper.tolist(),
-            "threshold": jl.threshold.tolist(),
-            "q_index": [int(i) for i in jl.q_index],
-            "joint_names": list(jl.joint_names),
-        }
+        The engine reads no Python attribute by name: each kind gives its settings as a
+        small bound struct (:meth:`ConstraintKind.engine_config`), in the order their rows
+        are evaluated and named; the collision scene as a ``SceneConfig`` (its
+        ``pin.GeometryModel`` borrowed, never copied). Each struct checks its sizes when
+        built (``ValueError``); the set checks them against the robot's model and scene.
+        """
+        from clik.engine import load
+
+        return load().ConstraintSetConfig(
+            model=self.robot.model,
+            kinds=[k.engine_config() for k in self.kinds],
+            scene=None if self.scene is None else self.scene.engine_config(),
+            release=self.release_rule,
+            hysteresis=float(self.hysteresis),
+            max_active=None if self.max_active is None else int(self.max_active),
+            monitor_margin=float(self.monitor_margin),
+        )
+
+
+K = TypeVar("K", bound=ConstraintKind)
+
+
+def _with_gain(kind: K, gain: float | None) -> K:
+    """``kind`` with ``gain`` (a copy: the user's object is left as given)."""
+    return kind if gain is None or kind.gain == gain else kind.replaced(gain=gain)

@@ -29,12 +29,26 @@ times the mean eigenvalue, so that it still points away from the singularity.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 
+from clik.constraints.kind import (
+    CHECK_TOLERANCE,
+    Candidate,
+    ConstraintKind,
+    KindRun,
+    PoseCheck,
+    RunSetup,
+    Sample,
+    Violation,
+)
 from clik.errors import InputError
 from clik.manipulability import manipulability
+
+if TYPE_CHECKING:
+    from clik.result import TrackingResult
 
 DEXTERITY_KEY = "dexterity"
 """The row's constraint name (events, records)."""
@@ -43,18 +57,21 @@ SINGULAR_DAMPING = 1e-9
 """``mu`` of the row at a singular ``J J^T``, relative to its mean eigenvalue."""
 
 
-class Dexterity:
+class Dexterity(ConstraintKind):
     """The dexterity constraint: ``w(q) >= w_min`` on the task's manipulability.
 
     Args:
         threshold: ``w_min`` [m^p, p the task's position rows: m^2 for the case
             study's (x, y) task, m^3 for a position or pose task].
+        gain: The row's gain [1/s]; None: the law's default.
 
     Raises:
         InputError: A threshold that is not a positive finite number.
     """
 
-    def __init__(self, threshold: float) -> None:
+    name = "dexterity"
+
+    def __init__(self, threshold: float, gain: float | None = None) -> None:
         try:
             value = float(threshold)
         except (TypeError, ValueError):
@@ -64,6 +81,7 @@ class Dexterity:
                 "constraints.dexterity.threshold", "a positive manipulability [m^p]", threshold
             )
         self.threshold = value
+        self.gain = gain
 
     def __repr__(self) -> str:
         return f"Dexterity(threshold={self.threshold!r})"
@@ -72,6 +90,78 @@ class Dexterity:
         """The error ``e_w = w_min - w`` (D2) of the task Jacobian ``J`` (m, nv), and ``w``."""
         w = manipulability(J)
         return self.threshold - w, w
+
+    def start(self, setup: RunSetup) -> DexterityRun:
+        """The row's state for one run (the task's frame and rows).
+
+        Raises:
+            InputError: No task frame given.
+        """
+        if setup.frame_id < 0:
+            raise InputError("constraints.dexterity", "the task's frame and rows for the row")
+        return DexterityRun(self, setup)
+
+    def engine_config(self) -> Any:
+        """``_engine.DexterityConfig``."""
+        from clik.engine import load
+
+        return load().DexterityConfig(threshold=self.threshold, gain=self.gain)
+
+    def finish(
+        self, result: TrackingResult, records: dict[str, Any], n_rec: int, extra: dict[str, Any]
+    ) -> None:
+        """The row's settings as ``dexterity_used``."""
+        extra["dexterity_used"] = {"threshold": self.threshold, "gain": self.gain}
+
+    def check(self, checker: PoseCheck, q: np.ndarray) -> list[Violation]:
+        """``w(q) < w_min`` (D1)-(D2) on the task rows."""
+        J = checker.task_jacobian(q)
+        if J is None:
+            return []
+        error, w = self.error(J)
+        if error <= CHECK_TOLERANCE * self.threshold:
+            return []
+        detail = f"manipulability w = {w:.4g} < threshold {self.threshold:.4g}"
+        return [Violation("dexterity", detail, error)]
+
+    def with_margin(self, margin: float) -> Dexterity:
+        """The threshold ``margin`` larger (solve mode)."""
+        return Dexterity(self.threshold + margin, self.gain)
+
+    def fingerprint(self) -> tuple[Any, ...]:
+        """Threshold and gain."""
+        return (self.threshold, self.gain)
+
+
+class DexterityRun(KindRun):
+    """The dexterity row in one run: ``w`` every sample, its gradient while active.
+
+    Attributes:
+        manipulability: This sample's ``w`` (D1) [m^p].
+    """
+
+    def __init__(self, kind: Dexterity, setup: RunSetup) -> None:
+        super().__init__(kind)
+        self.kind: Dexterity = kind
+        self.frame_id = setup.frame_id
+        self.task_rows = setup.task_rows
+        self.manipulability = math.nan
+
+    def evaluate(self, s: Sample, out: list[Candidate]) -> None:
+        """The error (D2) of the task rows: a candidate when positive or active.
+
+        Only ``w`` (D1) is evaluated here (a Cholesky factor of the m x m ``J J^T``); the
+        row's gradient (D3), which needs the kinematic Hessian, only while it is active.
+        """
+        error, self.manipulability = self.kind.error(s.J_task)
+        if error > 0.0 or DEXTERITY_KEY in s.active_keys:
+            thr = self.kind.threshold
+            out.append(Candidate(DEXTERITY_KEY, self, 0, error, thr, thr))
+
+    def row(self, s: Sample, c: Candidate, out: np.ndarray) -> None:
+        """The gradient (D3), no feed-forward."""
+        dexterity_row(s.model, s.data, self.frame_id, self.task_rows, s.J_task, out)
+        c.feed = 0.0
 
 
 def dexterity_row(

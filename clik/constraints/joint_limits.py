@@ -18,17 +18,28 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clik.constraints.kind import (
+    CHECK_TOLERANCE,
+    Candidate,
+    ConstraintKind,
+    KindRun,
+    PoseCheck,
+    RunSetup,
+    Sample,
+    Violation,
+)
 from clik.errors import InputError, JointNotFound
 from clik.robot import CONTINUOUS, PRISMATIC, REVOLUTE, joint_kind
 
+if TYPE_CHECKING:
+    from clik.result import TrackingResult
+
 DEFAULT_THRESHOLD = math.pi / 90.0
 """Default ``d_q`` of revolute joints: 2 deg [rad]."""
-DEFAULT_PRISMATIC_THRESHOLD = 0.005
-"""Default ``d_q`` of prismatic joints in a scenario (``prismatic_threshold``) [m]."""
 RANGE_FRACTION = 0.25
 """Largest threshold, as a fraction of the joint's range: a row cannot fire over the whole range."""
 
@@ -60,7 +71,7 @@ def convert_override(
     }
 
 
-class JointLimits:
+class JointLimits(ConstraintKind):
     """The joint-range rows of one robot, evaluated for all limited joints at once.
 
     Rows exist for the one-DOF joints (revolute, prismatic) whose limits, after
@@ -81,6 +92,7 @@ class JointLimits:
             limits (e.g. the case study's ``q3 <= -80 deg``) [rad or m]; only
             revolute and prismatic joints.
         prismatic_threshold: ``d_q`` of the prismatic joints [m]; default: ``threshold``.
+        gain: The rows' gain [1/s]; None: the law's default.
 
     Attributes:
         joint_names: The limited joints (rows exist for these only).
@@ -102,7 +114,11 @@ class JointLimits:
         threshold: float | np.ndarray = DEFAULT_THRESHOLD,
         override: Mapping[str, Mapping[str, float]] | None = None,
         prismatic_threshold: float | None = None,
+        gain: float | None = None,
     ) -> None:
+        self.robot = robot
+        self.gain = gain
+        self._args = (threshold, override, prismatic_threshold)
         model = robot.model  # type: ignore[attr-defined]
         all_names = list(robot.joint_names)  # type: ignore[attr-defined]
         joints = list(model.joints[1:])
@@ -172,8 +188,10 @@ class JointLimits:
         self.row_threshold = np.concatenate([self.threshold, self.threshold])
         self._thr = self.row_threshold
         self.sign = np.concatenate([np.ones(n), -np.ones(n)])
-        self.errors = np.zeros(2 * n)
-        self._qi = np.zeros(n)
+
+    name = "joint"
+    covers_robot_limits = True
+    """Its rows for solve mode also keep the other joints inside the robot's limits."""
 
     def _check_usable(self, thr: np.ndarray, model: Any, prismatic: bool) -> None:
         """Refuse a threshold at least as wide as the widest (URDF) range of its kind.
@@ -197,22 +215,20 @@ class JointLimits:
                     f"{ranges.max():.6g} {unit}, this threshold {thr[mine].max():.6g} {unit})",
                 )
 
-    def _take(self, q: np.ndarray) -> np.ndarray:
-        """The limited joints' values [rad or m]."""
-        return np.take(q, self.q_index, out=self._qi)
-
-    def evaluate(self, q: np.ndarray) -> np.ndarray:
+    def evaluate(self, q: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Errors ``e_q = d_q - d`` (17) of all ``2 n`` rows (lower rows, then upper rows).
 
         Args:
             q: A configuration (nq,).
+            out: Where to write them (2 n,); None: a new array.
 
         Returns:
             One error per entry of :attr:`names` [rad or m], positive inside the
-            threshold band (a buffer reused by the next call).
+            threshold band.
         """
-        e, n = self.errors, self.n
-        qi = self._take(q)
+        n = self.n
+        e = np.empty(2 * n) if out is None else out
+        qi = np.take(q, self.q_index)
         # d = q - lower  (lower rows),  d = upper - q  (upper rows)
         np.subtract(qi, self._bound[:n], out=e[:n])
         np.add(qi, self._bound[n:], out=e[n:])
@@ -251,6 +267,142 @@ class JointLimits:
         """
         out[:] = 0.0
         out[self.v_index[i % self.n]] = self.sign[i]
+
+    # -- the kind --------------------------------------------------------------------------
+
+    def start(self, setup: RunSetup) -> JointRangeRun:
+        """The rows' state for one run."""
+        return JointRangeRun(self)
+
+    def engine_config(self) -> Any:
+        """``_engine.JointRangeConfig``."""
+        from clik.engine import load
+
+        return load().JointRangeConfig(
+            q_index=[int(i) for i in self.q_index],
+            v_index=[int(i) for i in self.v_index],
+            lower=self.lower,
+            upper=self.upper,
+            threshold=self.threshold,
+            joint_names=list(self.joint_names),
+            names=list(self.names),
+            row_threshold=self.row_threshold,
+            sign=self.sign,
+            gain=self.gain,
+        )
+
+    def used(self) -> dict[str, Any]:
+        """The rows' limits and thresholds, as a run's summary reports them."""
+        return {
+            "lower": self.lower.tolist(),
+            "upper": self.upper.tolist(),
+            "threshold": self.threshold.tolist(),
+            "q_index": [int(i) for i in self.q_index],
+            "joint_names": list(self.joint_names),
+        }
+
+    def finish(
+        self, result: TrackingResult, records: dict[str, Any], n_rec: int, extra: dict[str, Any]
+    ) -> None:
+        """The limits used, as ``joint_limits_used``."""
+        extra["joint_limits_used"] = self.used()
+
+    def joint_ranges(self) -> dict[str, tuple[float, float]]:
+        """The constraint's limits per joint (tighter than the robot's where overridden)."""
+        return {
+            name: (float(lo), float(hi))
+            for name, lo, hi in zip(self.joint_names, self.lower, self.upper, strict=True)
+        }
+
+    def check(self, checker: PoseCheck, q: np.ndarray) -> list[Violation]:
+        """Joints inside a row's threshold band (17) or beyond the constraint's limit."""
+        out: list[Violation] = []
+        qi = q[self.q_index]
+        for k, name in enumerate(self.joint_names):
+            unit, thr = self.units[k], float(self.threshold[k])
+            for side, d in (("lower", qi[k] - self.lower[k]), ("upper", self.upper[k] - qi[k])):
+                if thr - d <= CHECK_TOLERANCE:
+                    continue
+                limit = self.lower[k] if side == "lower" else self.upper[k]
+                where = f"{-d:.4g} {unit} beyond" if d < 0 else f"{d:.4g} {unit} from"
+                detail = (
+                    f"{name} = {qi[k]:.6g} {unit}, {where} its {side} limit {limit:.6g} {unit} "
+                    f"(threshold {thr:.4g} {unit})"
+                )
+                out.append(Violation(f"joint range of {name}", detail, float(thr - d)))
+        return out
+
+    def with_margin(self, margin: float) -> JointLimits:
+        """Rows ``margin`` beyond each threshold; other joints' rows at the robot's limits.
+
+        The other limited joints get rows :data:`ROBOT_LIMIT_ROWS` inside the robot's
+        own limits (solve mode).
+        """
+        return robot_limit_rows(self.robot, self, margin)
+
+    def fingerprint(self) -> tuple[Any, ...]:
+        """Limits, thresholds and gain."""
+        return (
+            self.lower.tobytes(), self.upper.tobytes(), self.threshold.tobytes(), self.gain
+        )  # fmt: skip
+
+
+ROBOT_LIMIT_ROWS = 1e-3
+"""Solve mode's rows keep joints this far inside the robot's own limits [rad or m]."""
+
+
+def robot_limit_rows(
+    robot: object, limits: JointLimits | None = None, margin: float = 0.0
+) -> JointLimits:
+    """Rows :data:`ROBOT_LIMIT_ROWS` inside the robot's limits (solve mode's joint rows).
+
+    ``limits``' joints keep their own limits, with thresholds ``margin`` larger.
+    """
+    thresholds = np.full(robot.nq, ROBOT_LIMIT_ROWS)  # type: ignore[attr-defined]
+    override = None
+    gain = None
+    if limits is not None:
+        thresholds[limits.q_index] = limits.threshold + margin
+        override = {
+            name: {"lower": float(lo), "upper": float(hi)}
+            for name, lo, hi in zip(limits.joint_names, limits.lower, limits.upper, strict=True)
+        }
+        gain = limits.gain
+    return JointLimits(robot, thresholds, override, gain=gain)
+
+
+class JointRangeRun(KindRun):
+    """Joint-range rows in one run, behind a certificate.
+
+    The smallest margin to a threshold band, lowered by ``max |dq|`` per step, says
+    when a band may be entered; the rows are evaluated only then or while one is active.
+    """
+
+    def __init__(self, kind: JointLimits) -> None:
+        super().__init__(kind)
+        self.kind: JointLimits = kind
+        self.errors = np.zeros(2 * kind.n)
+        self.slack = -1.0  # unknown: evaluate at the first sample
+
+    def evaluate(self, s: Sample, out: list[Candidate]) -> None:
+        """Joint-range errors (17): candidates inside their band, or active."""
+        jl = self.kind
+        if s.dq_abs is not None and s.dq_abs.size:
+            self.slack -= float(s.dq_abs.max())
+        if self.slack > 0.0 and not s.active_items(self):
+            return
+        e = jl.evaluate(s.q, self.errors)
+        self.slack = -float(e.max()) if e.size else math.inf
+        thr = jl.row_threshold
+        for i in np.flatnonzero(e > -thr):
+            key = jl.names[i]
+            if e[i] > 0.0 or key in s.active_keys:
+                out.append(Candidate(key, self, int(i), float(e[i]), float(thr[i]), float(thr[i])))
+
+    def row(self, s: Sample, c: Candidate, out: np.ndarray) -> None:
+        """Row (19): ``+-1`` at the joint."""
+        self.kind.row(c.item, out)
+        c.feed = 0.0
 
 
 def _thresholds(threshold: float | np.ndarray, nq: int) -> np.ndarray:

@@ -141,8 +141,7 @@ def _build(spec: ReachSpec) -> tuple[Robot, Task, ConstraintSet | None]:
     except RobotLoadError as exc:
         raise ScenarioError(scenario.file, "robot.source", str(exc)) from None
     task = Task(robot, spec.frame, spec.kind, axes)
-    enabled = any(c.get("enabled") for c in scenario.constraints.values() if isinstance(c, dict))
-    if not (scenario.obstacles or enabled):
+    if not scenario.has_constraints:
         return robot, task, None
     return robot, task, build_constraints(scenario, robot, task)
 

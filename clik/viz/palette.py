@@ -37,6 +37,11 @@ JOINT_LIMIT_ACTIVE = (0.85, 0.1, 0.8)
 JOINT_LIMIT_NEAR = (0.95, 0.85, 0.1)
 """Links of a joint inside its range threshold, row not active (yellow)."""
 
+REGION = (0.55, 0.35, 0.1)
+"""A region a constraint keeps a frame in: a workspace box, a tool cone (brown)."""
+REGION_OPACITY = 0.12
+"""Opacity of a region's walls."""
+
 LEGEND = (
     (REFERENCE, "reference"),
     (TRAIL, "path"),
@@ -47,5 +52,6 @@ LEGEND = (
     (MONITOR_CLEAR, "closest link outside threshold"),
     (JOINT_LIMIT_ACTIVE, "joint range row active"),
     (JOINT_LIMIT_NEAR, "joint inside range threshold"),
+    (REGION, "workspace box, tool cone"),
 )
 """``(colour, label)`` of each element of the tracking scene's legend (the HTML caption)."""

@@ -6,6 +6,7 @@ self-contained HTML file (:func:`clik.viz.export_html`). Scene tree:
 - ``/meshcat/robot/<joint>/<geometry>``: the robot (visual or collision geometry);
 - ``/meshcat/obstacles/<name>/{body,shell}``: obstacles and threshold shells;
 - ``/meshcat/paths/reference`` and ``/meshcat/paths/trail/<k>``: the task frame's paths;
+- ``/meshcat/regions/<name>``: workspace boxes and tool cones (:mod:`clik.viz.shape_layer`);
 - ``/meshcat/witness/...``: witness segments of the obstacle rows;
 
 then one animation (real time, ``fps`` frames per second, looping) and the
@@ -31,6 +32,7 @@ from clik.viz.robot_layer import (
     joint_tracks,
     robot_commands,
 )
+from clik.viz.shape_layer import region_layer
 from clik.viz.timeline import Timeline, frame_origins, joint_placements
 from clik.viz.witness_layer import monitor_segments, row_segments
 
@@ -134,6 +136,12 @@ def build_scene(
     t0 = float(result.t[0])
     commands += obstacle_commands(obstacles, t0)
     clips.update(obstacle_tracks(obstacles, timeline, t0))
+
+    region_cmds, region_clips = region_layer(
+        robot, list(result.info.get("shapes") or []), q, timeline
+    )
+    commands += region_cmds
+    clips.update(region_clips)
 
     commands += reference_commands(result.reference_position)
     trail, trail_clips = trail_commands(np.asarray(result.position), timeline)

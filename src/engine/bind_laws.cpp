@@ -11,6 +11,8 @@ namespace nb = nanobind;
 namespace clik {
 
 void bind_laws(nb::module_& m) {
+  m.attr("CONDITION_RATIO") = CONDITION_RATIO;
+  m.attr("STEP_BUDGET") = STEP_BUDGET;
   m.def(
       "law_velocity",
       [](const std::string& law, const Mat& J, const Vec& e, const Vec& K, const Vec& ff, int m_rows,

@@ -61,6 +61,8 @@ nb::object started(const Solver& self, bool ran, nb::DRef<Vec> q) {
 }  // namespace
 
 void bind_solve(nb::module_& m) {
+  m.attr("STALL_PROGRESS") = STALL_PROGRESS;
+  m.attr("STALL_ITERATIONS") = STALL_ITERATIONS;
   nb::class_<Solver>(m, "Solver",
                      "Single-pose solves of one task with one set of settings "
                      "(clik/solve_mode.py): damped Levenberg-Marquardt on log6 for a full pose, "

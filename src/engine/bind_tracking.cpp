@@ -1,21 +1,26 @@
 // Python entry point of a tracking run (used by clik/compiled_run.py): Python
-// builds the robot, the reference chunks and the record arrays; the engine
-// runs the samples and writes the record in place.
+// builds the robot, the reference chunks and the record arrays, and hands them over
+// as typed configs; the engine runs the samples and writes the record in place.
+#include <cstdint>
 #include <memory>
+#include <optional>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
-#include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
 #include "bindings.hpp"
 #include "constraints/bind_constraints.hpp"
 #include "constraints/constraint_run.hpp"
 #include "model_bridge.hpp"
+#include "recording.hpp"
 #include "tracking.hpp"
 
 namespace nb = nanobind;
@@ -24,7 +29,75 @@ namespace clik {
 
 namespace {
 
-using F64 = nb::ndarray<double, nb::c_contig, nb::device::cpu>;
+template <typename T>
+using Array = nb::ndarray<T, nb::numpy, nb::c_contig, nb::device::cpu>;
+template <typename T>
+using In = nb::ndarray<const T, nb::c_contig, nb::device::cpu>;
+
+// The Recorder's arrays (clik/recording.py), written in place: each must already have
+// its dtype and be contiguous (never converted: a converted copy would be written).
+struct RecordArrays {
+  long N = 0, every = 1;
+  Array<std::intptr_t> idx;
+  Array<double> q, qdot, qddot, position;
+  std::optional<Array<double>> reference;
+  Array<double> error;
+  std::optional<Array<double>> orientation_error;
+  std::optional<Array<std::int16_t>> active;
+  std::optional<Array<double>> distance;
+  Array<double> joint_min, joint_max, qdot_prev;
+
+  long capacity() const { return static_cast<long>(idx.shape(0)); }
+  long nq() const { return static_cast<long>(q.shape(1)); }
+  long nv() const { return static_cast<long>(qdot.shape(1)); }
+
+  // Throws std::invalid_argument unless every shape fits N, every, nq and nv.
+  void validate() const {
+    const long n = idx.ndim() == 1 ? capacity() : -1, every_ = std::max(every, 1L);
+    const long kept = N < 1 ? 0 : (N - 1) / every_ + 1 + ((N - 1) % every_ ? 1 : 0);
+    auto shaped = [](const auto& a, long rows, long cols) {
+      return (cols < 0 ? a.ndim() == 1 : a.ndim() == 2 && static_cast<long>(a.shape(1)) == cols) &&
+             static_cast<long>(a.shape(0)) == rows;
+    };
+    const bool ok =
+        N >= 1 && every >= 1 && n >= kept && q.ndim() == 2 &&
+        qdot.ndim() == 2 && shaped(q, n, nq()) && shaped(qdot, n, nv()) &&
+        shaped(qddot, n, nv()) && shaped(position, n, 3) && shaped(error, n, -1) &&
+        (!reference || shaped(*reference, n, 3)) &&
+        (!orientation_error || shaped(*orientation_error, n, -1)) &&
+        (!active || shaped(*active, n, -1)) && (!distance || shaped(*distance, n, -1)) &&
+        shaped(joint_min, nq(), -1) && shaped(joint_max, nq(), -1) && shaped(qdot_prev, nv(), -1);
+    if (!ok) {
+      throw std::invalid_argument(
+          "RecordArrays: idx (n,), q (n, nq), qdot and qddot (n, nv), position and reference "
+          "(n, 3), error, orientation_error, active and distance (n,), joint_min and joint_max "
+          "(nq,), qdot_prev (nv,), with n >= the samples kept of N every `every`");
+    }
+  }
+
+  RecordBuffers buffers() const {
+    RecordBuffers b;
+    b.N = N;
+    b.every = every;
+    b.capacity = capacity();
+    b.nq = static_cast<int>(nq());
+    b.nv = static_cast<int>(nv());
+    b.idx = idx.data();
+    b.q = q.data();
+    b.qdot = qdot.data();
+    b.qddot = qddot.data();
+    b.position = position.data();
+    b.reference = reference ? reference->data() : nullptr;
+    b.error = error.data();
+    b.orientation_error = orientation_error ? orientation_error->data() : nullptr;
+    b.active = active ? active->data() : nullptr;
+    b.distance = distance ? distance->data() : nullptr;
+    b.joint_min = joint_min.data();
+    b.joint_max = joint_max.data();
+    b.qdot_prev = qdot_prev.data();
+    return b;
+  }
+};
 
 const char* stop_name(Stop s) {
   switch (s) {
@@ -38,99 +111,167 @@ const char* stop_name(Stop s) {
   return "";
 }
 
-template <typename T>
-T* data_of(nb::handle array) {
-  if (array.is_none()) return nullptr;
-  return nb::cast<nb::ndarray<T, nb::c_contig, nb::device::cpu>>(array).data();
-}
-
 // A run and the Python objects whose memory it uses (kept alive with it).
 struct PyTrackingRun {
-  nb::object model, recorder, times;
+  nb::object model;
+  In<double> times;
+  RecordArrays record;
   std::unique_ptr<ConstraintRun> constraints;  // before run: it outlives the loop's use
   std::unique_ptr<TrackingRun> run;
 };
 
-PyTrackingRun make_run(nb::object model, int frame, std::vector<int> rows, bool has_position,
-                       bool has_orientation, const std::string& law, double damping, double dt,
-                       double beta_max, const Vec& K_task, int n_rows,
-                       std::tuple<double, double, double, double, double, double> stop,
-                       nb::object t, nb::object recorder, std::vector<int> joint_index,
-                       const Vec& joint_lower, const Vec& joint_upper,
-                       std::vector<std::string> joint_names, nb::handle constraints,
-                       double alpha) {
+void make_run(PyTrackingRun* self, nb::object model, const TaskConfig& task,
+              const LawConfig& law, const StopConfig& stop, In<double> t,
+              const RecordArrays& record, JointMonitorConfig joints,
+              const std::optional<ConstraintSetConfig>& constraints) {
   const pinocchio::Model& m = borrow_model(model.ptr());
-  TaskSpec task{frame, std::move(rows), has_position, has_orientation};
-  LawSettings ls{law_kind(law), damping, dt, beta_max};
-  StopSettings ss;
-  std::tie(ss.deadlock_window, ss.deadlock_ratio, ss.deadlock_error, ss.max_joint_step,
-           ss.stall_window, ss.stall_progress) = stop;
-  RecordBuffers b;
-  b.N = nb::cast<long>(recorder.attr("N"));
-  b.every = nb::cast<long>(recorder.attr("every"));
-  b.capacity = nb::cast<long>(recorder.attr("capacity"));
-  b.nq = m.nq;
-  b.nv = m.nv;
-  b.idx = data_of<std::intptr_t>(recorder.attr("idx"));
-  b.q = data_of<double>(recorder.attr("q"));
-  b.qdot = data_of<double>(recorder.attr("qdot"));
-  b.qddot = data_of<double>(recorder.attr("qddot"));
-  b.position = data_of<double>(recorder.attr("position"));
-  b.reference = data_of<double>(recorder.attr("reference"));
-  b.error = data_of<double>(recorder.attr("error"));
-  b.orientation_error = data_of<double>(recorder.attr("orientation_error"));
-  b.active = data_of<std::int16_t>(recorder.attr("active"));
-  b.distance = data_of<double>(recorder.attr("distance"));
-  b.joint_min = data_of<double>(recorder.attr("joint_min"));
-  b.joint_max = data_of<double>(recorder.attr("joint_max"));
-  b.qdot_prev = data_of<double>(recorder.attr("_qdot_prev"));
-  JointRange joints{std::move(joint_index), joint_lower, joint_upper, std::move(joint_names)};
-  // No conversion: a converted copy would die here, leaving the view dangling.
-  const auto grid =
-      nb::cast<nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu>>(t, false);
-  const TimesView times(grid.data(), static_cast<Eigen::Index>(grid.shape(0)));
-  PyTrackingRun out{model, recorder, t, nullptr, nullptr};
-  if (!constraints.is_none()) {
-    const ConstraintConfig cfg = config_from_set(constraints);
+  if (t.ndim() != 1 || static_cast<long>(t.shape(0)) != record.N || record.nq() != m.nq ||
+      record.nv() != m.nv) {
+    throw std::invalid_argument("TrackingRun: t (N,) and the record's nq, nv are the model's");
+  }
+  const TimesView times(t.data(), static_cast<Eigen::Index>(t.shape(0)));
+  std::unique_ptr<ConstraintRun> crun;
+  if (constraints) {
     const int m_rows = static_cast<int>(task.rows.size());
-    out.constraints = std::make_unique<ConstraintRun>(cfg, m, m_rows, ls.kind, alpha, times,
-                                                      static_cast<int>(b.capacity), task.frame,
-                                                      task.rows);
-    if (m_rows + std::max(out.constraints->limit(), 0) > n_rows) {
-      throw std::invalid_argument("n_rows: fewer than the task's and the constraints' rows");
+    crun = std::make_unique<ConstraintRun>(*constraints, m, m_rows, law.settings.kind, law.alpha,
+                                           times, static_cast<int>(record.capacity()), task.frame,
+                                           task.rows);
+    if (m_rows + std::max(crun->limit(), 0) > law.rows) {
+      throw std::invalid_argument(
+          "LawConfig.rows: fewer than the task's and the constraints' rows");
     }
   }
-  out.run = std::make_unique<TrackingRun>(m, task, ls, K_task, n_rows, ss, times, b,
-                                          std::move(joints), out.constraints.get());
-  return out;
+  auto run = std::make_unique<TrackingRun>(m, task, law, stop, times, record.buffers(),
+                                           std::move(joints), crun.get());
+  new (self) PyTrackingRun{std::move(model), t, record, std::move(crun), std::move(run)};
 }
 
-nb::tuple advance(PyTrackingRun& self, long c0, long c1, nb::handle P_d, nb::handle R_d, F64 FF,
-                  nb::ndarray<bool, nb::c_contig, nb::device::cpu> at_rest,
-                  F64 q) {
+nb::tuple advance(PyTrackingRun& self, long c0, long c1, std::optional<In<double>> P_d,
+                  std::optional<In<double>> R_d, In<double> FF, In<bool> at_rest,
+                  Array<double> q) {
+  const auto n = static_cast<std::size_t>(c1 - c0);
+  const auto m = static_cast<std::size_t>(self.run->extended().m);
+  const bool ok = c0 >= 0 && c1 >= c0 && c1 <= static_cast<long>(self.record.N) &&
+                  FF.size() >= n * m && at_rest.size() >= n && (!P_d || P_d->size() >= 3 * n) &&
+                  (!R_d || R_d->size() >= 9 * n) &&
+                  static_cast<long>(q.size()) == static_cast<long>(self.record.nq());
+  if (!ok) {
+    throw std::invalid_argument(
+        "advance: samples c0 <= c1 <= N; FF (c1 - c0, m), at_rest (c1 - c0,), P_d (c1 - c0, 3) "
+        "and R_d (c1 - c0, 3, 3) or None, q (nq,)");
+  }
   Advance a;
-  const double* p = data_of<double>(P_d);
-  const double* r = data_of<double>(R_d);
   {
     nb::gil_scoped_release release;
     Eigen::Map<Vec> qv(q.data(), static_cast<Eigen::Index>(q.shape(0)));
-    a = self.run->advance(c0, c1, p, r, FF.data(), at_rest.data(), qv);
+    a = self.run->advance(c0, c1, P_d ? P_d->data() : nullptr, R_d ? R_d->data() : nullptr,
+                          FF.data(), at_rest.data(), qv);
   }
   return nb::make_tuple(a.next, stop_name(a.stop), a.k, a.r, a.err);
+}
+
+void bind_configs(nb::module_& m) {
+  nb::class_<TaskConfig>(m, "TaskConfig", "The task: its frame and rows (clik.Task).")
+      .def(nb::init<int, std::vector<int>, bool, bool>(), nb::kw_only(), nb::arg("frame"),
+           nb::arg("rows"), nb::arg("has_position"), nb::arg("has_orientation"))
+      .def_ro("frame", &TaskConfig::frame)
+      .def_ro("rows", &TaskConfig::rows)
+      .def_ro("has_position", &TaskConfig::has_position)
+      .def_ro("has_orientation", &TaskConfig::has_orientation);
+  nb::class_<LawConfig>(m, "LawConfig", "The law, the task's gains and the extended task's room.")
+      .def(
+          "__init__",
+          [](LawConfig* self, const std::string& law, double damping, double dt, double beta_max,
+             const Vec& K_task, int rows, double alpha) {
+            if (!(dt > 0.0)) throw std::invalid_argument("LawConfig: dt > 0 [s]");
+            new (self) LawConfig{LawSettings{law_kind(law), damping, dt, beta_max}, K_task, rows,
+                                 alpha};
+          },
+          nb::kw_only(), nb::arg("law"), nb::arg("damping"), nb::arg("dt"), nb::arg("beta_max"),
+          nb::arg("K_task"), nb::arg("rows"), nb::arg("alpha"))
+      .def_prop_ro("dt", [](const LawConfig& c) { return c.settings.dt; })
+      .def_ro("K_task", &LawConfig::K_task)
+      .def_ro("rows", &LawConfig::rows)
+      .def_ro("alpha", &LawConfig::alpha);
+  nb::class_<StopConfig>(m, "StopConfig", "The stop checks' settings (clik.stop_checks).")
+      .def(nb::init<double, double, double, double, double, double>(), nb::kw_only(),
+           nb::arg("deadlock_window"), nb::arg("deadlock_ratio"), nb::arg("deadlock_error"),
+           nb::arg("max_joint_step"), nb::arg("stall_window"), nb::arg("stall_progress"))
+      .def_ro("deadlock_window", &StopConfig::deadlock_window)
+      .def_ro("deadlock_ratio", &StopConfig::deadlock_ratio)
+      .def_ro("deadlock_error", &StopConfig::deadlock_error)
+      .def_ro("max_joint_step", &StopConfig::max_joint_step)
+      .def_ro("stall_window", &StopConfig::stall_window)
+      .def_ro("stall_progress", &StopConfig::stall_progress);
+  nb::class_<JointMonitorConfig>(m, "JointMonitorConfig",
+                                 "The joint limits a run must stay in (violations).")
+      .def(
+          "__init__",
+          [](JointMonitorConfig* self, std::vector<int> index, const Vec& lower, const Vec& upper,
+             std::vector<std::string> names) {
+            const auto n = static_cast<Eigen::Index>(index.size());
+            if (lower.size() != n || upper.size() != n ||
+                static_cast<Eigen::Index>(names.size()) != n) {
+              throw std::invalid_argument(
+                  "JointMonitorConfig: lower, upper and names need one entry per index");
+            }
+            new (self) JointMonitorConfig{std::move(index), lower, upper, std::move(names)};
+          },
+          nb::kw_only(), nb::arg("index"), nb::arg("lower"), nb::arg("upper"), nb::arg("names"))
+      .def_ro("index", &JointMonitorConfig::index)
+      .def_ro("lower", &JointMonitorConfig::lower)
+      .def_ro("upper", &JointMonitorConfig::upper)
+      .def_ro("names", &JointMonitorConfig::names);
+}
+
+void bind_record(nb::module_& m) {
+  nb::class_<RecordArrays>(m, "RecordArrays",
+                           "The Recorder's arrays (clik.recording), written in place.")
+      .def(
+          "__init__",
+          [](RecordArrays* self, long N, long every, Array<std::intptr_t> idx, Array<double> q,
+             Array<double> qdot, Array<double> qddot, Array<double> position,
+             std::optional<Array<double>> reference, Array<double> error,
+             std::optional<Array<double>> orientation_error,
+             std::optional<Array<std::int16_t>> active, std::optional<Array<double>> distance,
+             Array<double> joint_min, Array<double> joint_max, Array<double> qdot_prev) {
+            RecordArrays r{N,         every,  idx,      q,         qdot,      qddot,
+                           position,  reference, error, orientation_error, active, distance,
+                           joint_min, joint_max, qdot_prev};
+            r.validate();
+            new (self) RecordArrays(std::move(r));
+          },
+          nb::kw_only(), nb::arg("N"), nb::arg("every"), nb::arg("idx").noconvert(),
+          nb::arg("q").noconvert(), nb::arg("qdot").noconvert(), nb::arg("qddot").noconvert(),
+          nb::arg("position").noconvert(), nb::arg("reference").noconvert().none(),
+          nb::arg("error").noconvert(), nb::arg("orientation_error").noconvert().none(),
+          nb::arg("active").noconvert().none(), nb::arg("distance").noconvert().none(),
+          nb::arg("joint_min").noconvert(), nb::arg("joint_max").noconvert(),
+          nb::arg("qdot_prev").noconvert(),
+          "Each array as the Recorder allocated it (its dtype, contiguous: never converted), "
+          "reference, orientation_error, active and distance None where it has none.")
+      .def_ro("N", &RecordArrays::N)
+      .def_ro("every", &RecordArrays::every)
+      .def_prop_ro("capacity", &RecordArrays::capacity);
 }
 
 }  // namespace
 
 void bind_tracking(nb::module_& m) {
+  m.attr("BLOCKED_FRACTION") = BLOCKED_FRACTION;
+  m.attr("STABILITY_EVERY") = STABILITY_EVERY;
+  m.attr("JOINT_TOLERANCE") = JOINT_TOLERANCE;
+  bind_configs(m);
+  bind_record(m);
   nb::class_<PyTrackingRun>(m, "TrackingRun")
-      .def(nb::new_(&make_run), nb::arg("model"), nb::arg("frame"), nb::arg("rows"),
-           nb::arg("has_position"), nb::arg("has_orientation"), nb::arg("law"),
-           nb::arg("damping"), nb::arg("dt"), nb::arg("beta_max"), nb::arg("K_task"),
-           nb::arg("n_rows"), nb::arg("stop"), nb::arg("t"), nb::arg("recorder"),
-           nb::arg("joint_index"), nb::arg("joint_lower"), nb::arg("joint_upper"),
-           nb::arg("joint_names"), nb::arg("constraints").none(), nb::arg("alpha"))
-      .def("advance", &advance, nb::arg("c0"), nb::arg("c1"), nb::arg("P_d").none(),
-           nb::arg("R_d").none(), nb::arg("FF"), nb::arg("at_rest"), nb::arg("q"),
+      .def("__init__", &make_run, nb::kw_only(), nb::arg("model"), nb::arg("task"),
+           nb::arg("law"), nb::arg("stop"), nb::arg("t").noconvert(), nb::arg("record"),
+           nb::arg("joints"), nb::arg("constraints").none(),
+           "model: the robot's pin.Model (borrowed); t: the time grid (N,) float64, read in "
+           "place; record: the Recorder's arrays; constraints: a ConstraintSetConfig or None.")
+      .def("advance", &advance, nb::arg("c0"), nb::arg("c1"), nb::arg("P_d").noconvert().none(),
+           nb::arg("R_d").noconvert().none(), nb::arg("FF").noconvert(),
+           nb::arg("at_rest").noconvert(), nb::arg("q").noconvert(),
            "Run samples [c0, c1): (next, stop, k, r, err); q is updated in place.")
       .def_prop_ro("max_error", [](const PyTrackingRun& s) { return s.run->max_error(); })
       .def_prop_ro("last_error", [](const PyTrackingRun& s) { return s.run->last_error(); })
@@ -148,12 +289,7 @@ void bind_tracking(nb::module_& m) {
       .def("constraint_records",
            [](const PyTrackingRun& s) {
              if (!s.constraints) throw std::invalid_argument("the run has no constraints");
-             nb::dict out = constraint_records(*s.constraints, static_cast<int>(s.run->kept()));
-             nb::list active;
-             for (const std::string& name : s.constraints->active_names()) active.append(name);
-             out["active_names"] = active;
-             out["limit"] = s.constraints->limit();
-             return out;
+             return constraint_records(*s.constraints, static_cast<int>(s.run->kept()));
            },
            "What the run's constraints recorded (see constraints/bind_constraints.hpp).")
       .def_prop_ro("violations", [](const PyTrackingRun& s) {

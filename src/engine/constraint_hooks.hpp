@@ -19,8 +19,9 @@ class ConstraintRun;
 int update_constraints(ConstraintRun& crun, long k, const Vec& q, const pinocchio::Model& model,
                        pinocchio::Data& data, ExtendedTask& ext, Law& law, bool exact);
 
-// Every link inside an obstacle or another link at this sample, to the monitor.
-void observe_penetrations(ConstraintRun& crun, double tk, ViolationMonitor& monitor);
+// Every limit the constraints guard that is crossed at this sample (a link inside an
+// obstacle or another link), to the monitor.
+void observe_constraint_limits(const ConstraintRun& crun, double tk, ViolationMonitor& monitor);
 
 // The constraint columns of recorded sample j (active rows, minimum distance, ...).
 void record_constraints(ConstraintRun& crun, Recorder& rec, long j, int active);

@@ -27,4 +27,13 @@ pinocchio::GeometryModel& borrow_geometry_model(PyObject* obj) {
   return borrow<pinocchio::GeometryModel>(obj, "pin.GeometryModel");
 }
 
+std::shared_ptr<void> hold(PyObject* obj) {
+  Py_INCREF(obj);
+  return std::shared_ptr<void>(obj, [](void* p) {
+    const PyGILState_STATE gil = PyGILState_Ensure();
+    Py_DECREF(static_cast<PyObject*>(p));
+    PyGILState_Release(gil);
+  });
+}
+
 }  // namespace clik

@@ -9,6 +9,8 @@
 
 #include <Python.h>
 
+#include <memory>
+
 namespace clik {
 
 // The pinocchio::Model behind a `pin.Model` Python object; throws
@@ -18,5 +20,9 @@ pinocchio::Model& borrow_model(PyObject* obj);
 
 // The pinocchio::GeometryModel behind a `pin.GeometryModel` Python object.
 pinocchio::GeometryModel& borrow_geometry_model(PyObject* obj);
+
+// A strong reference to `obj`, dropped (under the GIL) when the last copy goes: keeps a
+// borrowed model's Python object alive with the C++ struct that points into it.
+std::shared_ptr<void> hold(PyObject* obj);
 
 }  // namespace clik

@@ -2,6 +2,7 @@
 #include "tracking.hpp"
 
 #include <cmath>
+#include <stdexcept>
 
 #include <pinocchio/algorithm/frames.hpp>
 #include <pinocchio/algorithm/jacobian.hpp>
@@ -17,13 +18,34 @@ namespace {
 constexpr auto LWA = pinocchio::LOCAL_WORLD_ALIGNED;
 }
 
-TrackingRun::TrackingRun(const pinocchio::Model& model, const TaskSpec& task,
-                         const LawSettings& law, const Vec& K_task, int rows,
-                         const StopSettings& stop, const TimesView& t, const RecordBuffers& record,
-                         JointRange joints, ConstraintRun* constraints)
-    : model_(model), data_(model), task_(task), m_(static_cast<int>(task.rows.size())),
-      dt_(law.dt), t_(t), ext_(m_, rows, model.nv, K_task), law_(law, rows, model.nv),
-      checks_(stop, law.kind, law.dt, rows), rec_(record), monitor_(std::move(joints)),
+const TaskConfig& TrackingRun::checked(const pinocchio::Model& model, const TaskConfig& task,
+                                       const LawConfig& law, const JointMonitorConfig& joints) {
+  const auto m = static_cast<int>(task.rows.size());
+  bool ok = task.frame >= 0 && task.frame < static_cast<int>(model.nframes) && m >= 1 &&
+            m <= MAX_TASK_ROWS && law.K_task.size() == m && law.rows >= m;
+  for (int row : task.rows) ok = ok && row >= 0 && row < 6;
+  if (!ok) {
+    throw std::invalid_argument(
+        "TrackingRun: the task's frame in the model, 1 to 6 rows among 0..5, one gain per row "
+        "and room for them (LawConfig.rows >= m)");
+  }
+  for (int i : joints.index) {
+    if (i < 0 || i >= model.nq) {
+      throw std::invalid_argument("JointMonitorConfig: an index outside the robot's model");
+    }
+  }
+  return task;
+}
+
+TrackingRun::TrackingRun(const pinocchio::Model& model, const TaskConfig& task,
+                         const LawConfig& law, const StopConfig& stop, const TimesView& t,
+                         const RecordBuffers& record, JointMonitorConfig joints,
+                         ConstraintRun* constraints)
+    : model_(model), data_(model), task_(checked(model, task, law, joints)),
+      m_(static_cast<int>(task.rows.size())), dt_(law.settings.dt), t_(t),
+      ext_(m_, law.rows, model.nv, law.K_task), law_(law.settings, law.rows, model.nv),
+      checks_(stop, law.settings.kind, law.settings.dt, law.rows), rec_(record),
+      monitor_(std::move(joints)),
       crun_(constraints), J6_(6, model.nv), e6_(Eigen::Matrix<double, 6, 1>::Zero()),
       qdot_(Vec::Zero(model.nv)), dq_(Vec::Zero(model.nv)), qnext_(Vec::Zero(model.nq)) {
   J6_.setZero();
@@ -90,7 +112,7 @@ Stop TrackingRun::stop(long k, double err, int r, double blocked, bool at_rest) 
 // Every limit crossed at this sample: joints, obstacle surfaces, link pairs.
 void TrackingRun::observe_limits(double tk, const Vec& q) {
   monitor_.observe_joints(tk, q);
-  if (crun_ != nullptr) observe_penetrations(*crun_, tk, monitor_);
+  if (crun_ != nullptr) observe_constraint_limits(*crun_, tk, monitor_);
 }
 
 Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* R_d,

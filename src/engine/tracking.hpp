@@ -27,13 +27,24 @@ namespace clik {
 
 class ConstraintRun;  // constraints/constraint_run.hpp
 
-// The task: a frame, its kept rows of (x, y, z, rx, ry, rz), what it has.
-struct TaskSpec {
+// The task: a frame, its kept rows of (x, y, z, rx, ry, rz), what it has
+// (`_engine.TaskConfig`).
+struct TaskConfig {
   int frame = 0;
   std::vector<int> rows;
   bool has_position = true;
   bool has_orientation = false;
 };
+
+// The law and the task's gains (`_engine.LawConfig`).
+struct LawConfig {
+  LawSettings settings;
+  Vec K_task;       // the task rows' gains [1/s] (m)
+  int rows = 0;     // room of the extended task: the task's rows and the most constraint rows
+  double alpha = 0; // the task's largest gain [1/s] (the constraint rows' default gains)
+};
+
+using StopConfig = StopSettings;  // `_engine.StopConfig`
 
 // Where a run is after advance().
 struct Advance {
@@ -46,9 +57,11 @@ struct Advance {
 
 class TrackingRun {
  public:
-  TrackingRun(const pinocchio::Model& model, const TaskSpec& task, const LawSettings& law,
-              const Vec& K_task, int rows, const StopSettings& stop, const TimesView& t,
-              const RecordBuffers& record, JointRange joints, ConstraintRun* constraints);
+  // Throws std::invalid_argument when the task, the gains, the rows or the joints do not
+  // fit the model.
+  TrackingRun(const pinocchio::Model& model, const TaskConfig& task, const LawConfig& law,
+              const StopConfig& stop, const TimesView& t, const RecordBuffers& record,
+              JointMonitorConfig joints, ConstraintRun* constraints);
 
   // Runs samples [c0, c1) with the chunk's reference: P_d (n, 3) or null, R_d
   // (n, 3, 3) row-major or null, FF (n, m), at_rest (n). q is the state, updated.
@@ -70,10 +83,12 @@ class TrackingRun {
   void error_norms(double& pos, double& rot) const;
   Stop stop(long k, double err, int r, double blocked, bool at_rest);
   void observe_limits(double tk, const Vec& q);
+  static const TaskConfig& checked(const pinocchio::Model& model, const TaskConfig& task,
+                                   const LawConfig& law, const JointMonitorConfig& joints);
 
   const pinocchio::Model& model_;
   pinocchio::Data data_;
-  TaskSpec task_;
+  TaskConfig task_;
   int m_;
   double dt_;
   TimesView t_;

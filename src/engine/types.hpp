@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -11,6 +12,8 @@ using Vec = Eigen::VectorXd;
 using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
+
+constexpr double INF = std::numeric_limits<double>::infinity();
 
 // A run's sample times t_k [s], read in place from the caller's array (a 10^8-sample run's
 // grid is 800 MB: never copied). The array must outlive the run that reads it.

@@ -1,6 +1,6 @@
 // Limits crossed during a run (mirrors clik/violations.py): a joint past its
 // limit (the tighter of the robot's and a joint-range constraint's), a link
-// inside an obstacle or another link. Strings are made only when a limit is
+// inside an obstacle or another link, a frame beyond a wall or outside a cone. Strings are made only when a limit is
 // first crossed.
 #pragma once
 
@@ -16,13 +16,13 @@ constexpr double JOINT_TOLERANCE = 1e-9;  // excursion not counted (rounding) [r
 
 struct ViolationRecord {
   std::string constraint;
-  std::string kind;  // "joint" or "obstacle"
+  std::string kind;  // "joint", "obstacle" (a penetration), "length" or "angle"
   double t_first, t_last, worst;
 };
 
 // The joint limits to stay in (clik.violations.JointRange): configuration
-// indices, bounds and joint names.
-struct JointRange {
+// indices, bounds and joint names (`_engine.JointMonitorConfig`).
+struct JointMonitorConfig {
   std::vector<int> index;
   Vec lower, upper;
   std::vector<std::string> names;
@@ -30,7 +30,7 @@ struct JointRange {
 
 class ViolationMonitor {
  public:
-  explicit ViolationMonitor(JointRange joints) : j_(std::move(joints)) {}
+  explicit ViolationMonitor(JointMonitorConfig joints) : j_(std::move(joints)) {}
 
   void observe_joints(double t, const Vec& q) {
     const std::size_t n = j_.index.size();
@@ -53,6 +53,12 @@ class ViolationMonitor {
     note(key, "obstacle", t, -distance);
   }
 
+  // A limit crossed by excess > 0: kind "length" [m] or "angle" [rad] (a workspace
+  // wall, a cone's surface).
+  void observe_excursion(double t, const std::string& key, const char* kind, double excess) {
+    note(key, kind, t, excess);
+  }
+
   // In the order the limits were first crossed (as recorded).
   const std::vector<ViolationRecord>& records() const { return records_; }
 
@@ -69,7 +75,7 @@ class ViolationMonitor {
     rec.worst = std::max(rec.worst, excess);
   }
 
-  JointRange j_;
+  JointMonitorConfig j_;
   std::vector<ViolationRecord> records_;
   std::unordered_map<std::string, std::size_t> where_;
 };

@@ -13,7 +13,39 @@
 
 namespace clik {
 
-void SceneConfig::bounding_spheres() {
+namespace {
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("SceneConfig: " + what);
+}
+
+}  // namespace
+
+void SceneConfig::prepare() {
+  require(gmodel != nullptr, "no GeometryModel");
+  const int n_geoms = static_cast<int>(gmodel->ngeoms);
+  const int n_pairs = static_cast<int>(gmodel->collisionPairs.size());
+  require(n_links >= 0 && n_links <= n_geoms,
+          "n_links = " + std::to_string(n_links) + " but the GeometryModel has " +
+              std::to_string(n_geoms) + " geometries");
+  const auto n = static_cast<std::size_t>(n_links);
+  require(link_joint.size() == n && static_cast<std::size_t>(local_radius.size()) == n &&
+              link_labels.size() == n && obstacle_pairs.rows() == n_links,
+          "link_joint, local_radius, link_labels and obstacle_pairs need one entry (row) per "
+          "link geometry (n_links = " + std::to_string(n_links) + ")");
+  for (int i = 0; i < obstacle_pairs.size(); ++i) {
+    const int p = obstacle_pairs.data()[i];
+    require(p >= 0 && p < n_pairs, "obstacle_pairs: pair " + std::to_string(p) +
+                                       " not among the GeometryModel's " +
+                                       std::to_string(n_pairs) + " collision pairs");
+  }
+  for (const SelfPair& sp : self_pairs) {
+    require(sp.pair >= 0 && sp.pair < n_pairs && sp.a >= 0 && sp.a < n_links && sp.b >= 0 &&
+                sp.b < n_links,
+            "self_pairs: (pair, a, b) = (" + std::to_string(sp.pair) + ", " +
+                std::to_string(sp.a) + ", " + std::to_string(sp.b) +
+                ") not a collision pair of two link geometries");
+  }
   joints.assign(link_joint.begin(), link_joint.end());
   std::sort(joints.begin(), joints.end());
   joints.erase(std::unique(joints.begin(), joints.end()), joints.end());
@@ -23,6 +55,13 @@ void SceneConfig::bounding_spheres() {
     const auto s = std::lower_bound(joints.begin(), joints.end(), link_joint[i]) - joints.begin();
     link_slot[i] = static_cast<int>(s);
     joint_radius[s] = std::max(joint_radius[s], local_radius[i]);
+  }
+}
+
+void SceneConfig::check(const pinocchio::Model& model) const {
+  for (int j : link_joint) {
+    require(j >= 0 && j < model.njoints,
+            "link_joint: joint " + std::to_string(j) + " not in the robot's model");
   }
 }
 
@@ -55,9 +94,8 @@ Mat motion_bounds(const pinocchio::Model& model, const SceneConfig& scene) {
   return rho;
 }
 
-CollisionScene::CollisionScene(const SceneConfig& scene,
-                               const std::vector<ObstacleConfig>& obstacles)
-    : scene_(&scene), obstacles_(&obstacles), gdata_(*scene.gmodel),
+CollisionScene::CollisionScene(const SceneConfig& scene)
+    : scene_(&scene), gdata_(*scene.gmodel),
       joint_pos_(static_cast<Eigen::Index>(scene.joints.size()), 3) {
   for (auto& request : gdata_.distanceRequests) {
     // GJK's default 1e-6 m tolerance makes hull-hull witness points jitter by that
@@ -69,20 +107,18 @@ CollisionScene::CollisionScene(const SceneConfig& scene,
     // a hull's support search climbs from the last vertex instead of vertex 0.
     request.gjk_initial_guess = coal::GJKInitialGuess::CachedGuess;
   }
-  for (int o = 0; o < static_cast<int>(obstacles.size()); ++o) {
-    if (obstacles[o].moving()) moving_.push_back(o);
-  }
   joint_pos_.setZero();
+}
+
+void CollisionScene::move_with(const ObstacleConfig& obstacle) {
+  if (obstacle.moving()) moving_.push_back(obstacle);
 }
 
 void CollisionScene::place_geometries(const pinocchio::Model& model, const pinocchio::Data& data,
                                       double t) {
   pinocchio::updateGeometryPlacements(model, data, *scene_->gmodel, gdata_);
   // A world-attached geometry's oMg is its placement (updateGeometryPlacements).
-  for (int o : moving_) {
-    const ObstacleConfig& ob = (*obstacles_)[o];
-    gdata_.oMg[ob.geometry] = ob.placement(t);
-  }
+  for (const ObstacleConfig& ob : moving_) gdata_.oMg[ob.geometry] = ob.placement(t);
 }
 
 const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& CollisionScene::place_joints(

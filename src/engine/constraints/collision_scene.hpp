@@ -4,12 +4,15 @@
 // The GeometryModel is the very one the Python CollisionScene built
 // (ConstraintSet.scene.gmodel), borrowed, never copied or changed: links first,
 // then obstacles; one collision pair per (link, obstacle), then the link-link
-// pairs. Each run owns a CollisionScene: its own GeometryData (coal's distance
+// pairs. Each run owns one CollisionScene (the core's, shared by the kinds that
+// measure distances: obstacles and link pairs): its own GeometryData (coal's distance
 // requests at GJK_TOLERANCE, as the Python side) and the joints' sphere centres.
 // A moving obstacle's placement at time t is written into this GeometryData's
 // oMg, not into the shared model.
 #pragma once
 
+#include <memory>
+#include <string>
 #include <vector>
 
 #include <pinocchio/multibody/data.hpp>
@@ -25,9 +28,11 @@ namespace clik {
 // (collision_scene.GJK_TOLERANCE).
 constexpr double GJK_TOLERANCE = 1e-9;
 
-// What the Python CollisionScene decided once (read by ConstraintConfig's binding).
+// What the Python CollisionScene decided once (`_engine.SceneConfig`, bound in
+// bind_constraints.cpp).
 struct SceneConfig {
-  const pinocchio::GeometryModel* gmodel = nullptr;  // borrowed (ConstraintConfig::owner)
+  const pinocchio::GeometryModel* gmodel = nullptr;  // borrowed: links first, then obstacles
+  std::shared_ptr<void> owner;   // keeps the pin.GeometryModel behind gmodel alive
   int n_links = 0;
   std::vector<int> link_joint;   // parent joint of each link geometry
   Vec local_radius;              // bounding radius of each link geometry about its joint [m]
@@ -37,13 +42,20 @@ struct SceneConfig {
     int a, b;  // link geometries
   };
   std::vector<SelfPair> self_pairs;
+  std::vector<std::string> link_labels;  // per link geometry, in constraint names
   std::vector<int> joints;       // joints with link geometry (sorted): bounding-sphere centres
   Vec joint_radius;              // radius of each such joint's bounding sphere [m]
   std::vector<int> link_slot;    // index in `joints` of each link geometry's joint
 
-  // joints, joint_radius and link_slot from link_joint and local_radius
-  // (CollisionScene._bounding_spheres).
-  void bounding_spheres();
+  // Sizes and indices within the GeometryModel; then joints, joint_radius and link_slot
+  // from link_joint and local_radius (CollisionScene._bounding_spheres). Throws
+  // std::invalid_argument.
+  void prepare();
+
+  // The link geometries' joints are the robot's.
+  void check(const pinocchio::Model& model) const;
+
+  int n_obstacles() const { return static_cast<int>(obstacle_pairs.cols()); }
 };
 
 // rho (n_links, nv): |pdot| <= rho_i . |qdot| for any point of link geometry i
@@ -62,7 +74,11 @@ struct PairDistance {
 
 class CollisionScene {
  public:
-  CollisionScene(const SceneConfig& scene, const std::vector<ObstacleConfig>& obstacles);
+  explicit CollisionScene(const SceneConfig& scene);
+
+  // Place this obstacle (its geometry in the scene) at its pose at time t with the
+  // geometries (a moving obstacle's kind registers it once).
+  void move_with(const ObstacleConfig& obstacle);
 
   // Place every geometry at data.oMi (one pass) and the moving obstacles at time t [s].
   void place_geometries(const pinocchio::Model& model, const pinocchio::Data& data, double t);
@@ -78,8 +94,7 @@ class CollisionScene {
 
  private:
   const SceneConfig* scene_;
-  const std::vector<ObstacleConfig>* obstacles_;
-  std::vector<int> moving_;  // obstacles with a velocity
+  std::vector<ObstacleConfig> moving_;  // obstacles with a velocity
   pinocchio::GeometryData gdata_;
   Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> joint_pos_;
 };

@@ -2,10 +2,13 @@
 #include "constraints/dexterity.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <utility>
 
 #include <pinocchio/algorithm/kinematics-derivatives.hpp>
+
+#include "constraints/bind_kind.hpp"
 
 namespace clik {
 
@@ -55,6 +58,51 @@ void DexterityRow::gradient(const pinocchio::Model& model, pinocchio::Data& data
     }
     out[k] = scale * sum;
   }
+}
+
+namespace {
+
+DexterityRow row_of(const KindSetup& setup) {
+  if (setup.frame < 0 || static_cast<int>(setup.task_rows.size()) != setup.m) {
+    throw std::invalid_argument("ConstraintRun: the dexterity row needs the task's frame and rows");
+  }
+  return DexterityRow(setup.model, setup.frame, setup.task_rows);
+}
+
+}  // namespace
+
+Dexterity::Dexterity(const DexterityConfig& config, const KindSetup& setup)
+    : cfg_(config), model_(setup.model), slot_(setup.slot), row_(row_of(setup)) {}
+
+void Dexterity::names(std::vector<std::string>& out) {
+  base_ = static_cast<int>(out.size());
+  out.emplace_back("dexterity");
+}
+
+// DexterityRun.evaluate: the error (D2) of the task rows; a candidate when positive or active.
+void Dexterity::evaluate(Sample& s, std::vector<Candidate>& out) {
+  const double thr = cfg_.threshold;
+  const double e = thr - row_.evaluate(s.ext.J.topRows(s.m));
+  if (e > 0.0 || s.is_active[base_]) {
+    Candidate c;
+    c.key = base_;
+    c.slot = slot_;
+    c.item = 0;
+    c.error = e;
+    c.scale = c.threshold = thr;
+    out.push_back(c);
+  }
+}
+
+// DexterityRun.row: (D3).
+void Dexterity::row(Sample& s, Candidate& c, Eigen::Ref<Eigen::RowVectorXd> row) {
+  row_.gradient(model_, s.data, row);
+  c.feed = 0.0;
+}
+
+void DexterityConfig::bind(nanobind::module_& m) {
+  bind_threshold_config<DexterityConfig>(m, "DexterityConfig",
+                                         "The dexterity row (D1)-(D3): threshold w_min [m^p].");
 }
 
 }  // namespace clik

@@ -12,15 +12,19 @@
 //   gradient of sqrt(det(J J^T + mu I)), mu = SINGULAR_DAMPING times the mean eigenvalue.
 //
 // DexterityRow is a run's workspace, allocated once: evaluate() each sample (an m x m
-// Cholesky factor), gradient() only while the row is active (the Hessian).
+// Cholesky factor), gradient() only while the row is active (the Hessian). Dexterity is
+// the kind (see kind.hpp): one row, key "dexterity", item 0.
 #pragma once
 
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <Eigen/Cholesky>
 #include <pinocchio/multibody/data.hpp>
 #include <pinocchio/multibody/model.hpp>
 
+#include "constraints/kind.hpp"
 #include "types.hpp"
 
 namespace clik {
@@ -28,8 +32,16 @@ namespace clik {
 // mu of the row at a singular J J^T, relative to its mean eigenvalue.
 constexpr double SINGULAR_DAMPING = 1e-9;
 
+class Dexterity;
+
 struct DexterityConfig {
-  double threshold = 0.0;  // w_min [m^p, p the task's position rows]
+  using Run = Dexterity;
+  double threshold = 0.0;      // w_min [m^p, p the task's position rows]
+  std::optional<double> gain;  // [1/s]; none: the law's default
+
+  bool wants_rows() const { return true; }
+  void check(const pinocchio::Model&, const SceneConfig*) const {}
+  static void bind(nanobind::module_& m);
 };
 
 class DexterityRow {
@@ -55,6 +67,22 @@ class DexterityRow {
   bool regular_ = false;  // J J^T positive definite (else the damped factor)
   double w_ = 0.0;
   pinocchio::Data::Tensor3x H_;  // (6, nv, nv): [a, i, k] = dJ_ai / dq_k, column-major
+};
+
+class Dexterity : public KindDefaults {
+ public:
+  // Throws std::invalid_argument without the task's frame and rows.
+  Dexterity(const DexterityConfig& config, const KindSetup& setup);
+  void names(std::vector<std::string>& out);
+  void evaluate(Sample& s, std::vector<Candidate>& out);
+  void row(Sample& s, Candidate& c, Eigen::Ref<Eigen::RowVectorXd> row);
+  const std::optional<double>& gain() const { return cfg_.gain; }
+
+ private:
+  DexterityConfig cfg_;
+  const pinocchio::Model& model_;
+  int slot_, base_ = 0;
+  DexterityRow row_;
 };
 
 }  // namespace clik

@@ -18,7 +18,7 @@ struct ObstacleConfig {
   Vec3 position = Vec3::Zero();      // centre at t = 0 [m]
   Vec3 velocity = Vec3::Zero();      // cdot of eq. (14) [m/s]
   double threshold = 0.0;            // d_o [m] (the obstacle's own, else the set's)
-  int geometry = -1;                 // its index in the scene's GeometryModel
+  int geometry = -1;                 // its index in the scene's GeometryModel (-1: from its pairs)
 
   bool moving() const { return (velocity.array() != 0.0).any(); }
 

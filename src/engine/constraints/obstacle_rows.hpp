@@ -1,5 +1,6 @@
 // Obstacle rows, eqs. (13)-(15) of docs/method.md, from coal's witness points
-// (mirrors clik/constraints/obstacle_rows.py).
+// (mirrors clik/constraints/obstacle_rows.py); the obstacle kind's rows, and the
+// link pairs' with the second link in the obstacle's place.
 //
 // With p_o the link's witness point, c the obstacle's, d = p_o - c, threshold d_o:
 // - squared (the paper's): e_o = 1/2 (d_o^2 - s|s|) (13), row |s| n^T J_po (15),
