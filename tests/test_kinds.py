@@ -39,7 +39,8 @@ from clik.constraints import (
 )
 from clik.constraints.kind import Sample
 from clik.constraints.registry import KINDS
-from clik.errors import InputError
+from clik.constraints.workspace import Workspace
+from clik.errors import InputError, ScenarioError
 from clik.trajectory import Line
 
 ROBOT = Path(__file__).parent / "data" / "spheres5r.urdf"
@@ -150,11 +151,26 @@ def dexterity_case() -> Case:
     return Case(cset, task, Q.copy(), np.array([0.1, 0.1, 0.0]), "dexterity", satisfied)
 
 
+def workspace_case() -> Case:
+    r = robot()
+    p = placement(r, Q, "tip").translation
+    lower, upper = p - np.array([0.05, 1.0, 1.0]), p + np.array([1.0, 1.0, 1.0])
+    box = Workspace(r, "tip", lower, upper, threshold=0.1, name="cell")
+
+    def satisfied(x: np.ndarray) -> bool:
+        y = placement(r, x, "tip").translation
+        return bool(np.all(y - lower >= 0.1 - CHECK) and np.all(upper - y >= 0.1 - CHECK))
+
+    cset = ConstraintSet(r, kinds=[box])
+    return Case(cset, tip_task(r), Q.copy(), np.array([-0.1, 0.0, 0.0]), "workspace", satisfied)
+
+
 CASES: dict[type, Callable[[], Case]] = {
     JointLimits: joint_case,
     ObstacleAvoidance: obstacle_case,
     LinkPairs: link_pair_case,
     Dexterity: dexterity_case,
+    Workspace: workspace_case,
 }
 
 KIND_IDS = [k.__name__ for k in KINDS]
@@ -287,6 +303,17 @@ BAD_INPUT = [
     ),
     (Dexterity, lambda r: Dexterity(float("nan")), "constraints.dexterity.threshold"),
     (Dexterity, lambda r: ConstraintSet(r, dexterity=0.1), "constraints.dexterity"),
+    (
+        Workspace,
+        lambda r: Workspace(r, "tip", [0, 0, 0], [1, -1, 1]),
+        "constraints.workspace.upper",
+    ),
+    (
+        Workspace,
+        lambda r: Workspace(r, "tip", [0, 0, 0], [1, 1, 0.1], threshold=0.05),
+        "constraints.workspace.threshold",
+    ),
+    (Workspace, lambda r: Workspace(r, "tip", [0, 0], [1, 1, 1]), "constraints.workspace.lower"),
 ]
 
 
@@ -300,3 +327,54 @@ def test_bad_input_names_the_field(kind_type, make, field):
         make(robot())
     assert info.value.field == field
     assert str(info.value).startswith(f"{field}: expected ")
+
+
+def test_an_unknown_frame_is_named():
+    with pytest.raises(clik.FrameNotFound):
+        Workspace(robot(), "wrist", [0, 0, 0], [1, 1, 1])
+
+
+SCENARIO = """
+name = "kinds"
+[robot]
+source = "{robot}"
+[initial]
+q = [0.3, 0.9, -1.2, 0.4, 0.8]
+[task]
+frame = "tip"
+kind = "position"
+[trajectory]
+kind = "hold"
+duration = 0.1
+[solver]
+dt = 0.001
+{table}
+"""
+
+
+@pytest.mark.parametrize(
+    ("table", "field"),
+    [
+        (
+            '[[constraints.workspace]]\nframe = "tip"\nlower = [0, 0]\nupper = [1, 1, 1]',
+            "constraints.workspace[0].lower",
+        ),
+        (
+            '[[constraints.workspace]]\nframe = "tip"\nlower = [0, 0, 0]\nupper = [1, 1, 1]\n'
+            "threshold = 0.5",
+            "constraints.workspace[0].threshold",
+        ),
+        (
+            '[[constraints.workspace]]\nframe = "hand"\nlower = [0, 0, 0]\nupper = [1, 1, 1]',
+            "constraints.workspace[0].frame",
+        ),
+    ],
+)
+def test_scenario_tables_name_the_key(tmp_path, table, field):
+    from clik.runner import build
+
+    path = tmp_path / "kinds.toml"
+    path.write_text(SCENARIO.format(robot=ROBOT, table=table))
+    with pytest.raises(ScenarioError) as info:
+        build(path)
+    assert f": {field}: " in str(info.value) or str(info.value).startswith(f"{path}: {field}")

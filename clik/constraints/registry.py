@@ -15,8 +15,9 @@ from clik.constraints.joint_limits import JointLimits
 from clik.constraints.kind import ConstraintKind
 from clik.constraints.link_pairs import LinkPairs
 from clik.constraints.obstacle_avoidance import ObstacleAvoidance
+from clik.constraints.workspace import Workspace
 
-TABLE_KINDS: tuple[type[ConstraintKind], ...] = ()
+TABLE_KINDS: tuple[type[ConstraintKind], ...] = (Workspace,)
 """Kinds read from ``[[constraints.<table>]]`` arrays, in the order their rows follow."""
 
 KINDS: tuple[type[ConstraintKind], ...] = (

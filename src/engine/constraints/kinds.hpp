@@ -13,11 +13,12 @@
 #include "constraints/joint_limits.hpp"
 #include "constraints/link_pairs.hpp"
 #include "constraints/obstacle_avoidance.hpp"
+#include "constraints/workspace.hpp"
 
 namespace clik {
 
-using KindConfig =
-    std::variant<JointRangeConfig, ObstacleRowsConfig, LinkPairsConfig, DexterityConfig>;
+using KindConfig = std::variant<JointRangeConfig, ObstacleRowsConfig, LinkPairsConfig,
+                                DexterityConfig, WorkspaceConfig>;
 
 namespace detail {
 template <typename Configs>
