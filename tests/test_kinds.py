@@ -37,6 +37,7 @@ from clik.constraints import (
     Obstacle,
     ObstacleAvoidance,
 )
+from clik.constraints.cone import Cone
 from clik.constraints.kind import Sample
 from clik.constraints.registry import KINDS
 from clik.constraints.workspace import Workspace
@@ -165,12 +166,30 @@ def workspace_case() -> Case:
     return Case(cset, tip_task(r), Q.copy(), np.array([-0.1, 0.0, 0.0]), "workspace", satisfied)
 
 
+def cone_case() -> Case:
+    r = robot()
+    a = placement(r, Q, "tip").rotation[:, 2]
+    side = np.cross(a, [1.0, 0.0, 0.0])
+    side /= np.linalg.norm(side)
+    u = math.cos(0.5) * a + math.sin(0.5) * np.cross(side, a)  # 0.5 rad from the axis
+    cone = Cone(r, "tip", [0, 0, 1], u, angle=0.55, threshold=0.1, name="upright")
+
+    def satisfied(x: np.ndarray) -> bool:
+        ax = placement(r, x, "tip").rotation[:, 2]
+        theta = math.atan2(np.linalg.norm(np.cross(ax, u)), float(ax @ u))
+        return theta <= 0.55 - 0.1 + CHECK
+
+    cset = ConstraintSet(r, kinds=[cone])
+    return Case(cset, tip_task(r), Q.copy(), np.array([0.1, -0.1, 0.0]), "cone", satisfied)
+
+
 CASES: dict[type, Callable[[], Case]] = {
     JointLimits: joint_case,
     ObstacleAvoidance: obstacle_case,
     LinkPairs: link_pair_case,
     Dexterity: dexterity_case,
     Workspace: workspace_case,
+    Cone: cone_case,
 }
 
 KIND_IDS = [k.__name__ for k in KINDS]
@@ -178,6 +197,7 @@ KIND_IDS = [k.__name__ for k in KINDS]
 
 def test_every_kind_has_a_case():
     assert set(KINDS) == set(CASES), "a registered kind needs a case in tests/test_kinds.py"
+    assert len(KINDS) == 6
 
 
 def kind_run(case: Case, kind_type: type, q: np.ndarray):
@@ -314,6 +334,14 @@ BAD_INPUT = [
         "constraints.workspace.threshold",
     ),
     (Workspace, lambda r: Workspace(r, "tip", [0, 0], [1, 1, 1]), "constraints.workspace.lower"),
+    (Cone, lambda r: Cone(r, "tip", [0, 0, 0], [0, 0, 1], 0.5), "constraints.cone.axis"),
+    (Cone, lambda r: Cone(r, "tip", [0, 0, 1], [0, 0, 1], 0.0), "constraints.cone.angle"),
+    (
+        Cone,
+        lambda r: Cone(r, "tip", [0, 0, 1], [0, 0, 1], 0.2, threshold=0.2),
+        "constraints.cone.threshold",
+    ),
+    (Cone, lambda r: Cone(r, "tip", [0, 0, 1], [0, 0, 1], 0.5, gain=-1.0), "constraints.cone.gain"),
 ]
 
 
@@ -368,6 +396,16 @@ dt = 0.001
             '[[constraints.workspace]]\nframe = "hand"\nlower = [0, 0, 0]\nupper = [1, 1, 1]',
             "constraints.workspace[0].frame",
         ),
+        (
+            '[[constraints.cone]]\nframe = "tip"\naxis = [0, 0, 1]\ndirection = [0, 0, 1]\n'
+            'angle = 200\nunit = "deg"',
+            "constraints.cone[0].angle",
+        ),
+        (
+            '[[constraints.cone]]\nframe = "tip"\naxis = [0, 0, 1]\ndirection = [0, 0, 1]\n'
+            "angle = 0.5\ncolour = 1",
+            "constraints.cone[0].colour",
+        ),
     ],
 )
 def test_scenario_tables_name_the_key(tmp_path, table, field):
@@ -378,3 +416,27 @@ def test_scenario_tables_name_the_key(tmp_path, table, field):
     with pytest.raises(ScenarioError) as info:
         build(path)
     assert f": {field}: " in str(info.value) or str(info.value).startswith(f"{path}: {field}")
+
+
+def test_scenario_tables_build_the_kinds(tmp_path):
+    from clik.runner import build
+
+    table = (
+        '[[constraints.workspace]]\nname = "cell"\nframe = "tip"\nlower = [-1, -1, 0]\n'
+        'upper = [1, 1, 1.5]\nthreshold = 0.05\n[[constraints.cone]]\nframe = "tip"\n'
+        'axis = [0, 0, 1]\ndirection = [0, 0, 1]\nangle = 90\nthreshold = 10\nunit = "deg"'
+    )
+    path = tmp_path / "kinds.toml"
+    path.write_text(SCENARIO.format(robot=ROBOT, table=table))
+    run = build(path)
+    kinds = run.tracker.constraints.kinds
+    box, cone = kinds[-2], kinds[-1]
+    assert isinstance(box, Workspace) and box.label == "cell" and box.threshold == 0.05
+    assert isinstance(cone, Cone) and cone.key == "cone:tip"
+    assert cone.angle == pytest.approx(math.pi / 2) and cone.threshold == pytest.approx(
+        math.radians(10)
+    )
+    result = run.execute()
+    assert result.status == "completed", result.reason
+    assert result.summary()["workspace_used"][0]["name"] == "cell"
+    assert result.summary()["cone_used"][0]["angle"] == pytest.approx(math.pi / 2)

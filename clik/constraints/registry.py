@@ -10,6 +10,7 @@ module with its :class:`~clik.constraints.kind.ConstraintKind`, its C++ type in
 
 from __future__ import annotations
 
+from clik.constraints.cone import Cone
 from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits
 from clik.constraints.kind import ConstraintKind
@@ -17,7 +18,7 @@ from clik.constraints.link_pairs import LinkPairs
 from clik.constraints.obstacle_avoidance import ObstacleAvoidance
 from clik.constraints.workspace import Workspace
 
-TABLE_KINDS: tuple[type[ConstraintKind], ...] = (Workspace,)
+TABLE_KINDS: tuple[type[ConstraintKind], ...] = (Workspace, Cone)
 """Kinds read from ``[[constraints.<table>]]`` arrays, in the order their rows follow."""
 
 KINDS: tuple[type[ConstraintKind], ...] = (

@@ -9,6 +9,7 @@
 
 #include <variant>
 
+#include "constraints/cone.hpp"
 #include "constraints/dexterity.hpp"
 #include "constraints/joint_limits.hpp"
 #include "constraints/link_pairs.hpp"
@@ -18,7 +19,7 @@
 namespace clik {
 
 using KindConfig = std::variant<JointRangeConfig, ObstacleRowsConfig, LinkPairsConfig,
-                                DexterityConfig, WorkspaceConfig>;
+                                DexterityConfig, WorkspaceConfig, ConeConfig>;
 
 namespace detail {
 template <typename Configs>
