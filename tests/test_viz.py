@@ -179,6 +179,24 @@ class TestScene:
         assert tracks["/meshcat/obstacles/pin"] == [".position"]
         assert "/meshcat/obstacles/pin" not in animated_paths(build_scene(case_study).commands)
 
+    def test_workspace_box_and_tool_cone_are_drawn(self):
+        """The regions of the kinds (info["shapes"]): the box's walls and edges and its
+        threshold; the cone, whose apex follows its frame's origin along the animation."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            result = build(scenario_path("panda_cup_upright")).execute()
+        commands = build_scene(result, geometry="collision").commands
+        objects = set_object_paths(commands)
+        assert {
+            "/meshcat/regions/workspace:table/walls",
+            "/meshcat/regions/workspace:table/edges",
+            "/meshcat/regions/workspace:table/threshold",
+            "/meshcat/regions/cone:cup/cone",
+        } <= objects
+        tracks = animated_paths(commands)
+        assert tracks["/meshcat/regions/cone:cup"] == [".position"]
+        assert "/meshcat/regions/workspace:table" not in tracks
+
     def test_timeline_is_real_time_and_ends_on_the_last_sample(self):
         t = np.arange(3001) * 1e-3
         timeline = Timeline.from_times(t, 30)
