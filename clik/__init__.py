@@ -35,8 +35,10 @@ from clik.errors import (
     ScenarioError,
     UnknownRobotError,
 )
+from clik.model.loading import ReferenceClippedWarning
+from clik.model.mimic import MimicJointWarning
+from clik.model.robot import Robot
 from clik.result import TrackingResult
-from clik.robot import MimicJointWarning, ReferenceClippedWarning, Robot
 from clik.solve_mode import SolveResult, solve
 from clik.speed_limits import SpeedLimits
 from clik.task import Task

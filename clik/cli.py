@@ -186,7 +186,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def cmd_robots(args: argparse.Namespace) -> int:
     """``clik robots``: the robots known by name, and where each is found."""
-    from clik.robot import Robot
+    from clik.model.robot import Robot
 
     for name, where in Robot.available().items():
         print(f"{name:32s} {where}")

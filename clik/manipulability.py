@@ -22,7 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 if TYPE_CHECKING:
-    from clik.robot import Robot
+    from clik.model.robot import Robot
 
 RECORD_KEY = "manipulability"
 """Name of the per-sample array in ``result.extra``."""

@@ -21,7 +21,7 @@ import math
 import numpy as np
 import pinocchio as pin
 
-from clik.robot import Robot
+from clik.model.robot import Robot
 
 
 def reach_bound(robot: Robot, frame_id: int) -> tuple[np.ndarray, float, str]:

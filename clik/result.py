@@ -23,7 +23,7 @@ from clik.manipulability import manipulability_record, min_manipulability
 from clik.velocity_report import VelocityLimits, model_velocity_limits, velocity_report
 
 if TYPE_CHECKING:
-    from clik.robot import Robot
+    from clik.model.robot import Robot
 
 STATUSES = (
     "completed",

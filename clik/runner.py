@@ -23,9 +23,9 @@ from clik.errors import (
     JointNotFound,
     ScenarioError,
 )
+from clik.model.robot import Robot
 from clik.reach import reach_bound
 from clik.result import TrackingResult
-from clik.robot import Robot
 from clik.scenario import Scenario, check_dt, load_scenario
 from clik.schema import Table
 from clik.speed_limits import SpeedLimits

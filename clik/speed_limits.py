@@ -31,7 +31,7 @@ from clik.errors import InputError, JointNotFound
 from clik.velocity_report import velocity_names
 
 if TYPE_CHECKING:
-    from clik.robot import Robot
+    from clik.model.robot import Robot
 
 MAX_SCALE = 10.0
 """Largest ``scale`` accepted: a fraction of the URDF limit up to ten times it."""

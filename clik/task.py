@@ -27,7 +27,7 @@ import pinocchio as pin
 from clik.errors import InputError
 
 if TYPE_CHECKING:
-    from clik.robot import Robot
+    from clik.model.robot import Robot
 
 TaskKind = Literal["position", "orientation", "pose"]
 

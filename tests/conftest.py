@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from clik.robot import PANDA_FINGERS, Robot
+from clik.model.robot import PANDA_FINGERS, Robot
 
 
 @pytest.fixture(scope="session")

@@ -62,7 +62,7 @@ from clik import (
 )
 from clik.cli import main
 from clik.constraints import ConstraintSet, Dexterity, JointLimits, Obstacle
-from clik.robot import Robot
+from clik.model.robot import Robot
 from clik.runner import build, run_scenario
 from clik.scenarios import scenario_path
 from clik.trajectory import Hold, Line

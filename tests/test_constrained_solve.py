@@ -16,7 +16,7 @@ import pytest
 
 from clik import InputError, Task, solve
 from clik.constraints import ConstraintSet, JointLimits, Obstacle
-from clik.robot import Robot
+from clik.model.robot import Robot
 
 N_CASES = 30
 """Random targets and obstacles (seeded)."""

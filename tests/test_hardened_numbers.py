@@ -11,7 +11,7 @@ Decisions recorded here:
   thresholds within 1 km, scale factors within 1e-6..1e6, angles within four turns
   (8 pi), ``gain * dt <= 1e4``, ``duration >= 1e-6 s`` and ``dt <= duration / 2``.
 - A robot's own reference posture outside its limits is clipped into them with a
-  :class:`~clik.robot.ReferenceClippedWarning`; a user's ``q0`` outside them is still
+  :class:`~clik.model.loading.ReferenceClippedWarning`; a user's ``q0`` outside them is still
   infeasible.
 - A link geometry whose hull coal cannot build is skipped (warned, and listed in
   ``info["unmonitored_geometries"]``); the other geometries stay monitored.
@@ -37,7 +37,8 @@ from clik.cli import main
 from clik.constraints import ConstraintSet, Obstacle
 from clik.constraints.collision_scene import SkippedGeometryWarning
 from clik.laws import damped_solve, prioritized, solve_small
-from clik.robot import ReferenceClippedWarning, Robot
+from clik.model.loading import ReferenceClippedWarning
+from clik.model.robot import Robot
 from clik.scenarios import scenario_path
 from clik.trajectory import Hold
 

@@ -27,7 +27,7 @@ from clik import GeometryError, InputError, RobotLoadError
 from clik.cli import main
 from clik.constraints import Obstacle
 from clik.mesh_check import MAX_MESH_BYTES
-from clik.robot import Robot
+from clik.model.robot import Robot
 from clik.scenarios import scenario_path
 from clik.urdf_check import MAX_MOVABLE_JOINTS, check_urdf
 
@@ -333,7 +333,7 @@ def test_a_huge_origin_is_refused_by_the_command_line(tmp_path, capsys):
 def test_a_100_mb_link_mesh_is_refused_on_its_size(tmp_path):
     sparse_stl(tmp_path / "big.stl", 100 * 2**20)
     write(tmp_path / "r.urdf", with_mesh("big.stl"))
-    result = bounded("from clik.robot import Robot\nRobot.load('r.urdf')", tmp_path)
+    result = bounded("from clik.model.robot import Robot\nRobot.load('r.urdf')", tmp_path)
     assert result["error"] == "RobotLoadError"
     assert f"above the budget of {MAX_MESH_BYTES} bytes" in result["message"]
 

@@ -43,7 +43,7 @@ import pytest
 
 from clik import ClikError, GeometryError, RobotLoadError, ScenarioError
 from clik.constraints import Obstacle
-from clik.robot import Robot
+from clik.model.robot import Robot
 from clik.runner import build
 from clik.scenario import load_scenario
 from clik.scenarios import scenario_path

@@ -24,7 +24,9 @@ from clik.constraints.build import build_constraints
 from clik.constraints.constraint_set import ConstraintSet
 from clik.constraints.joint_limits import JointLimits, limits_by_q
 from clik.errors import InfeasibleError, InputError, RobotLoadError, ScenarioError
-from clik.robot import PRISMATIC, REVOLUTE, JointValues, MimicJointWarning, Robot
+from clik.model.joints import PRISMATIC, REVOLUTE, JointValues
+from clik.model.mimic import MimicJointWarning
+from clik.model.robot import Robot
 from clik.scenario import parse_scenario
 
 if sys.version_info >= (3, 11):

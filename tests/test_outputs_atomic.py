@@ -32,9 +32,9 @@ import clik
 import clik.demo
 from clik.cli import BROKEN_PIPE, main
 from clik.errors import OutputError, OutputLockedError
+from clik.model.robot import Robot
 from clik.out_folder import output_lock
 from clik.result import write_outputs
-from clik.robot import Robot
 from clik.scenarios import scenario_path
 
 pytestmark = pytest.mark.timeout(240)

@@ -1,4 +1,4 @@
-"""clik.robot and clik.planar_arm: loading, kinematics, lookups and input checks."""
+"""clik.model.robot and clik.planar_arm: loading, kinematics, lookups and input checks."""
 
 from __future__ import annotations
 
@@ -7,8 +7,9 @@ import pinocchio as pin
 import pytest
 
 from clik.errors import FrameNotFound, InputError, JointNotFound, RobotLoadError, UnknownRobotError
+from clik.model.mimic import MimicJointWarning
+from clik.model.robot import Robot
 from clik.planar_arm import planar_arm_urdf, planar_forward_kinematics, write_planar_arm
-from clik.robot import MimicJointWarning, Robot
 
 POSITION_TOL = 1e-12  # [m], exact kinematics up to rounding
 CASE_STUDY_Q0 = np.deg2rad([180.0, -30.0, -90.0, -30.0])

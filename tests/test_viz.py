@@ -27,8 +27,8 @@ import clik
 from clik.constraints.constraint_set import ConstraintSet
 from clik.constraints.obstacle import Obstacle
 from clik.errors import InputError
+from clik.model.robot import PANDA_FINGERS
 from clik.result import TrackingResult, write_outputs
-from clik.robot import PANDA_FINGERS
 from clik.runner import build
 from clik.scenarios import scenario_path
 from clik.trajectory import Circle

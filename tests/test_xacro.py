@@ -23,7 +23,7 @@ from xacro import substitution_args
 
 from clik import InputError, RobotLoadError, ScenarioError
 from clik.cli import main
-from clik.robot import Robot
+from clik.model.robot import Robot
 from clik.runner import build
 from clik.scenario import load_scenario
 from clik.sweep.worker import cached_robot, robot_key

@@ -30,6 +30,7 @@ from clik.bench.pose_error import (
 )
 from clik.bench.solve_pink import PinkSolve, pink_setup_text, pink_solver
 from clik.bench.stats import ratio, stats
+from clik.model.robot import PANDA_FINGERS
 
 Engine = Literal["compiled", "python"]
 """An engine of :func:`clik.solve`."""
@@ -204,7 +205,7 @@ def bench_solve(config: BenchConfig, pink: Pink | None, log: Log) -> dict[str, A
         engine (``python_`` keys) and of pink (``pink_`` keys, with the speed-up,
         when pink ran).
     """
-    robot = clik.Robot.load("panda", lock=clik.robot.PANDA_FINGERS)
+    robot = clik.Robot.load("panda", lock=PANDA_FINGERS)
     task = clik.Task(robot, "panda_hand", "pose")
     model = robot.model
     targets = solve_targets(robot, task, config.solve_targets, config.seed)

@@ -16,7 +16,7 @@ from clik.errors import InputError
 from clik.result import TrackingResult
 
 if TYPE_CHECKING:
-    from clik.robot import Robot
+    from clik.model.robot import Robot
 
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 """Projection plane -> indices of its two world axes."""

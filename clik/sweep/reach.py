@@ -47,7 +47,7 @@ if TYPE_CHECKING:
     from distributed import Client
 
     from clik.constraints import ConstraintSet
-    from clik.robot import Robot
+    from clik.model.robot import Robot
     from clik.task import Task
 
 __all__ = [
@@ -121,7 +121,7 @@ def reach_objects(spec: ReachSpec) -> tuple[Robot, Task, ConstraintSet | None]:
 
 def _build(spec: ReachSpec) -> tuple[Robot, Task, ConstraintSet | None]:
     """Load the robot, build the task and (with a scenario) its constraints."""
-    from clik.robot import Robot
+    from clik.model.robot import Robot
     from clik.task import Task
 
     axes = list(spec.axes) if spec.axes else None

@@ -37,7 +37,7 @@ from clik.viz.robot_layer import joint_path, robot_commands
 from clik.viz.timeline import frame_origins, joint_placements
 
 if TYPE_CHECKING:
-    from clik.robot import Robot
+    from clik.model.robot import Robot
     from clik.sweep.reach_data import ReachMap
 
 ROOT = "/meshcat/reach"

@@ -35,7 +35,7 @@ from clik.scenario import parse_scenario
 from clik.sweep.keypath import substitute
 
 if TYPE_CHECKING:
-    from clik.robot import Robot
+    from clik.model.robot import Robot
     from clik.runner import Run
     from clik.scenario import Scenario
 
@@ -70,10 +70,10 @@ def robot_key(spec: dict[str, Any]) -> tuple[Any, ...]:
 def cached_robot(spec: dict[str, Any]) -> Robot:
     """The robot of a scenario's ``robot`` table, loaded once per worker thread.
 
-    A thread has its own robots: a :class:`~clik.robot.Robot` holds Pinocchio
+    A thread has its own robots: a :class:`~clik.model.robot.Robot` holds Pinocchio
     data that a run writes into.
     """
-    from clik.robot import Robot
+    from clik.model.robot import Robot
 
     cache = _robots()
     key = robot_key(spec)

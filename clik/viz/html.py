@@ -25,8 +25,8 @@ from clik.viz.commands import Command, color_int, pack
 from clik.viz.scene import Geometry, build_scene
 
 if TYPE_CHECKING:
+    from clik.model.robot import Robot
     from clik.result import TrackingResult
-    from clik.robot import Robot
 
 
 def _viewer_js() -> Path:

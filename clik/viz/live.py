@@ -20,8 +20,8 @@ from clik.viz.server import MeshcatServer
 from clik.viz.target import load_target
 
 if TYPE_CHECKING:
+    from clik.model.robot import Robot
     from clik.result import TrackingResult
-    from clik.robot import Robot
 
 _server: MeshcatServer | None = None
 

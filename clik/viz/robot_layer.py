@@ -29,8 +29,8 @@ from clik.viz.geometry import Shape, geometry_object_shape
 from clik.viz.timeline import Timeline
 
 if TYPE_CHECKING:
+    from clik.model.robot import Robot
     from clik.result import TrackingResult
-    from clik.robot import Robot
 
 ROOT = "/meshcat/robot"
 """Scene path of the robot."""

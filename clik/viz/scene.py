@@ -37,8 +37,8 @@ from clik.viz.timeline import Timeline, frame_origins, joint_placements
 from clik.viz.witness_layer import monitor_segments, row_segments
 
 if TYPE_CHECKING:
+    from clik.model.robot import Robot
     from clik.result import TrackingResult
-    from clik.robot import Robot
 
 Geometry = Literal["visual", "collision"]
 """Which of the robot's geometry models is drawn."""

@@ -20,8 +20,8 @@ from pathlib import Path
 from typing import Any
 
 from clik.errors import ClikError, InputError
+from clik.model.robot import Robot
 from clik.result import TrackingResult
-from clik.robot import Robot
 
 TRAJECTORY_FILE = "trajectory.npz"
 """The result file of an output folder."""

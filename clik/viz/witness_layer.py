@@ -30,8 +30,8 @@ from clik.viz.robot_layer import node_name
 from clik.viz.timeline import Timeline
 
 if TYPE_CHECKING:
+    from clik.model.robot import Robot
     from clik.result import TrackingResult
-    from clik.robot import Robot
 
 ROOT = "/meshcat/witness"
 """Scene path of the witness segments."""
