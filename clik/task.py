@@ -99,16 +99,6 @@ class Task:
         """Names of the kept components, in row order."""
         return [AXES[i] for i in self.rows]
 
-    @property
-    def position_rows(self) -> np.ndarray:
-        """Indices, within the task's rows, of the position components."""
-        return np.flatnonzero(self.rows < 3)
-
-    @property
-    def orientation_rows(self) -> np.ndarray:
-        """Indices, within the task's rows, of the orientation components."""
-        return np.flatnonzero(self.rows >= 3)
-
     def __repr__(self) -> str:
         return f"Task(frame={self.frame!r}, kind={self.kind!r}, axes={self.axes})"
 

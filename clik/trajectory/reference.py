@@ -129,11 +129,6 @@ class Reference:
         """Whether the reference gives a position (and a linear velocity)."""
         return self.position is not None
 
-    @property
-    def has_rotation(self) -> bool:
-        """Whether the reference gives a rotation (and an angular velocity)."""
-        return self.rotation is not None
-
 
 def _det3(R: np.ndarray) -> np.ndarray:
     """Determinants of 3x3 matrices (N, 3, 3), by cofactors (LAPACK's is 30x slower here)."""
