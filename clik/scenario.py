@@ -36,7 +36,7 @@ import numpy as np
 from clik.bounds import MAX_STEPS, SCALE_RANGE
 from clik.constraints.registry import TABLE_KINDS
 from clik.engine import ENGINES
-from clik.errors import ClikError, ScenarioError
+from clik.errors import ScenarioError
 from clik.robot import JointValues
 from clik.schema import (
     MAX_ANGLE,
@@ -489,10 +489,3 @@ def _velocity_limits(vl: Table) -> dict[str, Any]:
     }
     vl.done()
     return out
-
-
-def scenario_error_context(exc: ClikError, file: Path) -> ClikError:
-    """Attach the scenario file to an error raised while building its objects."""
-    if isinstance(exc, ScenarioError):
-        return exc
-    return ScenarioError(file, getattr(exc, "field", ""), str(exc))

@@ -68,7 +68,7 @@ class Tracker:
 
     Build once, then call :meth:`run` with a trajectory (and again with another
     one). Each run owns its extended task, its record and its constraint state
-    (:meth:`ConstraintSet.start`), so trackers and runs never share mutable state.
+    (:class:`~clik.constraints.ConstraintRun`), so trackers and runs never share mutable state.
 
     Args:
         task: The task (frame, kind, mask).
