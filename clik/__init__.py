@@ -35,15 +35,15 @@ from clik.errors import (
     ScenarioError,
     UnknownRobotError,
 )
+from clik.loop.tracking import ReachWarning, StabilityWarning, Tracker, track
 from clik.model.loading import ReferenceClippedWarning
 from clik.model.mimic import MimicJointWarning
 from clik.model.robot import Robot
-from clik.result import TrackingResult
-from clik.solve_mode import SolveResult, solve
-from clik.speed_limits import SpeedLimits
-from clik.task import Task
-from clik.tracking import ReachWarning, StabilityWarning, Tracker, track
-from clik.velocity_limits import track_within_limits
+from clik.outputs.result import TrackingResult
+from clik.solving.solve_mode import SolveResult, solve
+from clik.speed.speed_limits import SpeedLimits
+from clik.speed.velocity_limits import track_within_limits
+from clik.tasks.task import Task
 
 __all__ = [
     "ClikError",

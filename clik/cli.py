@@ -6,7 +6,7 @@ a run raised, or ended ``violated``, ``velocity_limit`` or ``diverged``; every
 row is still written), 2 bad input, 3 infeasible (the run ended ``violated``,
 ``velocity_limit``, ``deadlock`` or ``diverged``; its outputs are still
 written), 4 internal; 130 after Ctrl-C, 143 after SIGTERM (the output folder is
-then left as it was: :mod:`clik.out_folder`), 141 when stdout is closed early
+then left as it was: :mod:`clik.outputs.out_folder`), 141 when stdout is closed early
 (``clik robots | head -1``: quietly, like a process stopped by SIGPIPE).
 """
 
@@ -23,13 +23,13 @@ from typing import TYPE_CHECKING, Any
 from tqdm import tqdm
 
 from clik.errors import EXIT_CODES, ClikError, InputError
-from clik.export import FORMATS, check_exportable
-from clik.io import output_errors
-from clik.out_folder import output_folder
-from clik.result import FAILED_STATUSES, TrackingResult, write_outputs
+from clik.outputs.export import FORMATS, check_exportable
+from clik.outputs.io import output_errors
+from clik.outputs.out_folder import output_folder
+from clik.outputs.result import FAILED_STATUSES, TrackingResult, write_outputs
 
 if TYPE_CHECKING:
-    from clik.scenario import Scenario
+    from clik.scenarios.scenario import Scenario
     from clik.sweep.reach_data import ReachSpec
 
 SWEEP_FAILED = 1
@@ -101,7 +101,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
     Export options are checked before the run and before the output folder is touched.
     """
-    from clik.runner import build
+    from clik.scenarios.runner import build
 
     if args.export_every is not None and not args.export:
         raise InputError("--export-every", "to be given with --export", args.export_every)
@@ -336,7 +336,7 @@ def _reach_spec(args: argparse.Namespace) -> ReachSpec:
 
 def _reach_scenario(path: Path) -> Scenario:
     """The scenario of ``clik reach --scenario``; any problem with it names the flag."""
-    from clik.scenario import load_scenario
+    from clik.scenarios.scenario import load_scenario
 
     try:
         return load_scenario(path)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from clik.io import output_errors
-from clik.out_folder import output_folder
-from clik.result import TrackingResult, write_outputs
+from clik.outputs.io import output_errors
+from clik.outputs.out_folder import output_folder
+from clik.outputs.result import TrackingResult, write_outputs
 from clik.scenarios import CASE_STUDY, scenario_path
 
 
@@ -40,10 +40,10 @@ def run_demo(
 ) -> int:
     """Run the case-study scenarios; write each run's outputs under ``out/<name>/``.
 
-    ``out`` is written all at once (:func:`clik.out_folder.output_folder`): a
+    ``out`` is written all at once (:func:`clik.outputs.out_folder.output_folder`): a
     stopped demo leaves it as it was.
     """
-    from clik.runner import build
+    from clik.scenarios.runner import build
 
     out = Path(out)
     with output_folder(out, force) as work:

@@ -16,7 +16,7 @@ from clik.errors import EngineError
 
 ENGINES = ("compiled", "python")
 """``"compiled"``: the per-sample loop in C++ (default); ``"python"``: the readable
-loop of :mod:`clik.tracking`, the engine's specification."""
+loop of :mod:`clik.loop.tracking`, the engine's specification."""
 
 _loaded: ModuleType | None = None
 

@@ -11,8 +11,8 @@ import numpy as np
 
 from clik.bench.config import BenchConfig, Log
 from clik.bench.stats import stats
-from clik.runner import build
 from clik.scenarios import CASE_STUDY, scenario_path
+from clik.scenarios.runner import build
 
 
 @dataclass

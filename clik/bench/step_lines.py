@@ -16,9 +16,9 @@ from clik.bench.pink_backend import Pink
 from clik.bench.step_pink import pink_step_variant
 from clik.bench.step_variant import Variant, clik_variant
 from clik.constraints import ConstraintSet, JointLimits, Obstacle
-from clik.laws import LawName
-from clik.runner import Run, build
+from clik.loop.laws import LawName
 from clik.scenarios import scenario_path
+from clik.scenarios.runner import Run, build
 from clik.trajectory import Trajectory
 from clik.trajectory.reference import Reference
 

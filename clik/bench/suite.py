@@ -27,7 +27,7 @@ from clik.bench.step_lines import line_name
 from clik.bench.step_zoo import bench_zoo
 from clik.bench.sweep_rate import bench_sweep
 from clik.bench.targets import evaluate_targets, load_targets
-from clik.io import atomic_write, check_out_path, output_errors, write_json
+from clik.outputs.io import atomic_write, check_out_path, output_errors, write_json
 
 REQUIRED_KEYS = (
     "step_us.planar4r",

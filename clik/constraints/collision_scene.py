@@ -30,7 +30,7 @@ from clik.constraints.obstacle import Obstacle, convex_hull
 from clik.errors import GeometryError, InputError
 
 if TYPE_CHECKING:
-    from clik.robot import Robot
+    from clik.model.robot import Robot
 
 GJK_TOLERANCE = 1e-9
 """Tolerance of coal's GJK/EPA for link-obstacle and link-link distances [m]."""

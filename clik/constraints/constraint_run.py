@@ -32,12 +32,12 @@ import numpy as np
 import pinocchio as pin
 
 from clik.constraints.kind import Candidate, KindRun, RunSetup, Sample
-from clik.extended_task import ExtendedTask
+from clik.tasks.extended_task import ExtendedTask
 
 if TYPE_CHECKING:
     from clik.constraints.constraint_set import ConstraintSet
-    from clik.result import TrackingResult
-    from clik.violations import ViolationMonitor
+    from clik.constraints.violations import ViolationMonitor
+    from clik.outputs.result import TrackingResult
 
 LawFunction = Callable[[int, np.ndarray], Any]
 """``law(r, out)``: the law's joint velocity on the first ``r`` rows of the extended task."""

@@ -34,7 +34,7 @@ from clik.constraints.obstacle_avoidance import ObstacleAvoidance
 from clik.errors import InputError
 
 if TYPE_CHECKING:
-    from clik.robot import Robot
+    from clik.model.robot import Robot
 
 RELEASE_RULES = ("projection", "sign")
 

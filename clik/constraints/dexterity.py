@@ -3,7 +3,7 @@ r"""The dexterity row: the task's manipulability above a threshold (docs/method.
 The paper names constraints on the manipulator's dexterity as the next one to
 add; clik's row follows the pattern of the others. With ``J`` the task Jacobian
 (m, n) of eq. (3) (``LOCAL_WORLD_ALIGNED``, masked to the task's rows) and
-``w = sqrt(det(J J^T))`` (D1) (:func:`clik.manipulability.manipulability`), the
+``w = sqrt(det(J J^T))`` (D1) (:func:`clik.tasks.manipulability.manipulability`), the
 threshold ``w_min`` gives
 
 - the error ``e_w = w_min - w`` (D2), positive when ``w`` is below the threshold
@@ -45,10 +45,10 @@ from clik.constraints.kind import (
     Violation,
 )
 from clik.errors import InputError
-from clik.manipulability import manipulability
+from clik.tasks.manipulability import manipulability
 
 if TYPE_CHECKING:
-    from clik.result import TrackingResult
+    from clik.outputs.result import TrackingResult
 
 DEXTERITY_KEY = "dexterity"
 """The row's constraint name (events, records)."""

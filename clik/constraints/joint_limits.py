@@ -33,10 +33,10 @@ from clik.constraints.kind import (
     Violation,
 )
 from clik.errors import InputError, JointNotFound
-from clik.robot import CONTINUOUS, PRISMATIC, REVOLUTE, joint_kind
+from clik.model.joints import CONTINUOUS, PRISMATIC, REVOLUTE, joint_kind
 
 if TYPE_CHECKING:
-    from clik.result import TrackingResult
+    from clik.outputs.result import TrackingResult
 
 DEFAULT_THRESHOLD = math.pi / 90.0
 """Default ``d_q`` of revolute joints: 2 deg [rad]."""

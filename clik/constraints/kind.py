@@ -35,9 +35,9 @@ if TYPE_CHECKING:
     import pinocchio as pin
 
     from clik.constraints.collision_scene import CollisionScene
-    from clik.result import TrackingResult
-    from clik.robot import Robot
-    from clik.violations import ViolationMonitor
+    from clik.constraints.violations import ViolationMonitor
+    from clik.model.robot import Robot
+    from clik.outputs.result import TrackingResult
 
 
 CHECK_TOLERANCE = 1e-12
@@ -65,7 +65,10 @@ class Violation:
 
 
 class PoseCheck(Protocol):
-    """What a kind's check of one configuration reads (:class:`clik.pose_check.PoseCheck`)."""
+    """What a kind's check of one configuration reads.
+
+    :class:`clik.solving.pose_check.PoseCheck` is the one clik uses.
+    """
 
     scene: CollisionScene | None
 

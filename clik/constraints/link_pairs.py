@@ -27,7 +27,7 @@ from clik.constraints.kind import (
 from clik.constraints.obstacle_rows import obstacle_row, point_jacobian
 
 if TYPE_CHECKING:
-    from clik.violations import ViolationMonitor
+    from clik.constraints.violations import ViolationMonitor
 
 
 _STILL = np.zeros(3)

@@ -18,7 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from clik.errors import GeometryError, InputError, native_message
-from clik.mesh_check import (
+from clik.model.mesh_check import (
     SCALE_RANGE,
     MeshRefused,
     check_mesh_file,
@@ -69,10 +69,10 @@ class Obstacle:
         radius: Sphere, capsule or cylinder radius [m] (sphere radius 0 is a point).
         size: Box side lengths (3,) [m].
         length: Capsule or cylinder length along the local z axis [m].
-        file: Mesh file (STL, OBJ, DAE or PLY, see :mod:`clik.mesh_check` for the
+        file: Mesh file (STL, OBJ, DAE or PLY, see :mod:`clik.model.mesh_check` for the
             budgets); its convex hull is used.
         scale: Mesh scale (3,), each factor's magnitude within
-            :data:`~clik.mesh_check.SCALE_RANGE`.
+            :data:`~clik.model.mesh_check.SCALE_RANGE`.
 
     Attributes:
         geometry: The coal collision geometry (convex).
@@ -164,12 +164,12 @@ def _required(value: T | None, where: str, key: str) -> T:
 def _mesh_hull(file: object, scale: np.ndarray, where: str) -> tuple[coal.ConvexBase, float]:
     """Convex hull of a mesh file, and its bounding radius about the mesh origin.
 
-    The cheap checks of :func:`clik.mesh_check.check_mesh_file` run first (a
+    The cheap checks of :func:`clik.model.mesh_check.check_mesh_file` run first (a
     regular file, a known format, within the size and count budgets, not a
     symlink out of the folder its path names); an OBJ file is handed to the
     loader as a copy without its ``mtllib``/``usemtl`` lines, in a private
     temporary folder, so the loader reads no other file. The scaled vertices
-    must lie within :data:`~clik.mesh_check.MAX_COORDINATE` before the hull.
+    must lie within :data:`~clik.model.mesh_check.MAX_COORDINATE` before the hull.
     """
     path = Path(str(file))
     try:

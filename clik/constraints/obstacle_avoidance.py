@@ -41,8 +41,8 @@ from clik.errors import InputError
 
 if TYPE_CHECKING:
     from clik.constraints.collision_scene import CollisionScene
-    from clik.result import TrackingResult
-    from clik.violations import ViolationMonitor
+    from clik.constraints.violations import ViolationMonitor
+    from clik.outputs.result import TrackingResult
 
 
 class ObstacleAvoidance(ConstraintKind):

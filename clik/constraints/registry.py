@@ -2,8 +2,8 @@
 
 :data:`KINDS` lists every kind (the generic tests run over it); :data:`TABLE_KINDS`
 those a scenario gives as an array of tables, ``[[constraints.<table>]]``, read by
-:func:`clik.scenario.parse_scenario` and built by
-:func:`clik.constraints.build.build_constraints` without naming them. A new kind is a
+:func:`clik.scenarios.scenario.parse_scenario` and built by
+:func:`clik.scenarios.build_constraints.build_constraints` without naming them. A new kind is a
 module with its :class:`~clik.constraints.kind.ConstraintKind`, its C++ type in
 ``src/engine/constraints/`` (registered in ``kinds.hpp``), and a line here.
 """

@@ -38,9 +38,9 @@ from clik.errors import InputError
 from clik.schema import MAX_LENGTH, Table
 
 if TYPE_CHECKING:
-    from clik.result import TrackingResult
-    from clik.robot import Robot
-    from clik.violations import ViolationMonitor
+    from clik.constraints.violations import ViolationMonitor
+    from clik.model.robot import Robot
+    from clik.outputs.result import TrackingResult
 
 AXES = ("x", "y", "z")
 SIDES = ("lower", "upper")

@@ -2,7 +2,11 @@
 
 :class:`~clik.model.robot.Robot` is the entry point (``Robot.load``); the
 concerns it delegates sit one per module: where a robot is read from
-(``sources``), the models built from a checked URDF (``loading``), joint kinds
-and units (``joints``), locked joints (``locking``), mimic joints (``mimic``)
-and configuration checks (``configuration``).
+(``sources``), the strict checks on a URDF and its meshes before any library
+reads them (``urdf_check``, ``mesh_check``), xacro expansion
+(``xacro_expand``), the models built from a checked URDF (``loading``), joint
+kinds and units (``joints``), locked and mimic joints (``locking``, ``mimic``)
+and configuration checks (``configuration``). Beside them, what the model alone
+decides: planar arms written as URDF (``planar_arm``) and the bound on how far a
+frame can reach (``reach``).
 """

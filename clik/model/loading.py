@@ -1,6 +1,6 @@
 """From a checked URDF to Pinocchio's models: kinematics, collision and visual geometry.
 
-Every URDF has gone through :func:`clik.urdf_check.check_urdf` before Pinocchio
+Every URDF has gone through :func:`clik.model.urdf_check.check_urdf` before Pinocchio
 reads it here. Meshes are bounded once loaded (the formats the cheap checks
 cannot read), the reference configuration is the SRDF's posture or neutral,
 clipped into the limits, and the visual model is read on first use: meshes for
@@ -18,9 +18,9 @@ import numpy as np
 import pinocchio as pin
 
 from clik.errors import RobotLoadError, native_message
-from clik.mesh_check import vertex_problem
 from clik.model.joints import PRISMATIC, REVOLUTE, joint_kind
-from clik.urdf_check import parse_xml
+from clik.model.mesh_check import vertex_problem
+from clik.model.urdf_check import parse_xml
 
 
 class ReferenceClippedWarning(UserWarning):
@@ -67,13 +67,13 @@ def build_models(
 def check_mesh_extents(urdf: Path, collision_model: pin.GeometryModel) -> None:
     """Refuse a collision mesh whose scaled vertices leave the accepted range.
 
-    The cheap checks (:func:`clik.urdf_check.check_urdf`) bound a binary STL's
+    The cheap checks (:func:`clik.model.urdf_check.check_urdf`) bound a binary STL's
     vertices from the file; other formats are bounded here, after loading and
     before any convex hull is built from them.
 
     Raises:
         RobotLoadError: A mesh's vertices are not finite or beyond
-            :data:`~clik.mesh_check.MAX_COORDINATE` [m] from its origin.
+            :data:`~clik.model.mesh_check.MAX_COORDINATE` [m] from its origin.
     """
     for geometry_object in collision_model.geometryObjects:
         vertices = getattr(geometry_object.geometry, "vertices", None)

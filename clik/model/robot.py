@@ -1,10 +1,10 @@
 """A fixed-base robot: Pinocchio's kinematic and geometry models, loaded safely.
 
 :meth:`Robot.load` takes a URDF path, a xacro path (``arm.urdf.xacro``, expanded
-by :func:`clik.xacro_expand.expand_xacro`), the name of one of clik's robots
+by :func:`clik.model.xacro_expand.expand_xacro`), the name of one of clik's robots
 (``planar4r``) or an example-robot-data name (``panda``, ``ur5``, ...)
 (:mod:`clik.model.sources`). Every URDF goes through
-:func:`clik.urdf_check.check_urdf` before Pinocchio reads it
+:func:`clik.model.urdf_check.check_urdf` before Pinocchio reads it
 (:mod:`clik.model.loading`). The visual model is built on first use.
 
 Joint kinds and units are in :mod:`clik.model.joints`, locked joints in
@@ -34,8 +34,8 @@ from clik.model.loading import (
 from clik.model.locking import lock_values, reduced, set_locked
 from clik.model.mimic import Mimic, mimic_joints, mimic_values, warn_free_leaders
 from clik.model.sources import available_robots, source_files
-from clik.urdf_check import check_urdf
-from clik.xacro_expand import check_xacro_args, expand_xacro, is_xacro
+from clik.model.urdf_check import check_urdf
+from clik.model.xacro_expand import check_xacro_args, expand_xacro, is_xacro
 
 PANDA_FINGERS = {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}
 """``lock`` for the Panda's fingers, closed: ``Robot.load("panda", lock=PANDA_FINGERS)``
@@ -137,7 +137,7 @@ class Robot:
             RobotLoadError: The file is missing or invalid (including a ``<mimic>``
                 with a non-numeric multiplier or offset, or mimic joints that
                 follow each other in a cycle), or xacro cannot expand it (see
-                :func:`~clik.xacro_expand.expand_xacro`).
+                :func:`~clik.model.xacro_expand.expand_xacro`).
             JointNotFound: A joint in ``lock`` does not exist.
             InputError: A lock value is not finite or outside the joint's limits;
                 ``xacro_args`` for a source that is not a xacro file, or not

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Protocol
 
 from clik.errors import RobotLoadError, UnknownRobotError
-from clik.xacro_expand import is_xacro
+from clik.model.xacro_expand import is_xacro
 
 
 @dataclass(frozen=True)

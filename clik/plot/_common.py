@@ -18,7 +18,7 @@ from matplotlib.figure import Figure
 
 from clik.constraints.joint_limits import limits_by_q
 from clik.errors import InputError
-from clik.result import TrackingResult
+from clik.outputs.result import TrackingResult
 
 FIGSIZE = (7.0, 4.0)
 """Size of one plot [in]; with :data:`DPI` a PNG is 840 x 480 pixels."""

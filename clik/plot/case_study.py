@@ -11,6 +11,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
+from clik.outputs.result import TrackingResult
 from clik.plot._common import (
     display,
     drop_legend,
@@ -21,7 +22,6 @@ from clik.plot._common import (
 )
 from clik.plot.series import joint, obstacle_distance, tracking_error
 from clik.plot.stick import planar_stick
-from clik.result import TrackingResult
 
 CASE_STUDY_JOINT = 2
 """Index of ``q_3`` in the case study's joint vector."""

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
+from clik.outputs.result import TrackingResult
 from clik.plot._common import (
     Results,
     as_list,
@@ -21,7 +22,6 @@ from clik.plot._common import (
     save_figures,
 )
 from clik.plot.series import joint, obstacle_distance, tracking_error
-from clik.result import TrackingResult
 
 
 def result_plots(results: Results, names: Sequence[str] | None = None) -> dict[str, Figure]:

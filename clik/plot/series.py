@@ -12,6 +12,7 @@ import numpy as np
 from matplotlib.axes import Axes
 
 from clik.errors import InputError
+from clik.outputs.result import TrackingResult
 from clik.plot._common import (
     Results,
     as_list,
@@ -23,7 +24,6 @@ from clik.plot._common import (
     min_distance,
     run_labels,
 )
-from clik.result import TrackingResult
 
 Limit = float | tuple[float | None, float | None]
 """A joint limit: one value, or a ``(lower, upper)`` pair (either may be None) [rad or m]."""

@@ -13,7 +13,7 @@ from matplotlib.axes import Axes
 from matplotlib.patches import Circle, Polygon
 
 from clik.errors import InputError
-from clik.result import TrackingResult
+from clik.outputs.result import TrackingResult
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot

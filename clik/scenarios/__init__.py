@@ -1,4 +1,10 @@
-"""Scenario files shipped with clik: the case study of docs/method.md, laws (9) and (10)."""
+"""Scenarios: one TOML file names everything a run needs.
+
+``scenario`` reads and checks a file (with :mod:`clik.schema`), ``runner``
+turns a scenario into objects and runs it. The package also
+ships scenario files (the ``*.toml`` here, found with ``importlib.resources``):
+the case study of docs/method.md, laws (9) and (10).
+"""
 
 from __future__ import annotations
 

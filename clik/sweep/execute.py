@@ -41,8 +41,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from clik.errors import ClikError, InputError, ScenarioError
-from clik.io import output_errors
-from clik.out_folder import output_lock
+from clik.outputs.io import output_errors
+from clik.outputs.out_folder import output_lock
 from clik.sweep.progress import RunProgress
 from clik.sweep.spec import RunSpec, Sweep, load_sweep
 from clik.sweep.store import CSV, PARQUET, ResultStore, check_folder, read_statuses
@@ -238,7 +238,7 @@ def check_first_run(sweep: Sweep, runs: list[RunSpec]) -> None:
     """Build (not run) the first run here: a bad frame, joint or robot fails before any task."""
     if not runs:
         return
-    from clik.runner import build
+    from clik.scenarios.runner import build
 
     build(sweep.scenario(runs[0]))
 
@@ -279,7 +279,8 @@ def run_sweep(
     Raises:
         ScenarioError: The sweep file, or its first run's scenario, is invalid.
         SweepOutputExistsError: ``out`` holds something else and ``force`` is false.
-        OutputLockedError: Another clik run writes into ``out`` (see :mod:`clik.out_folder`).
+        OutputLockedError: Another clik run writes into ``out`` (see
+            :mod:`clik.outputs.out_folder`).
     """
     if not isinstance(sweep, Sweep):
         sweep = load_sweep(sweep)

@@ -7,7 +7,7 @@ Obstacles (an array of tables in the file) are addressed by their ``name``:
 
 Values are those of the scenario file, in its units (``initial.q`` in the
 ``[initial]`` table's ``unit``, lengths in metres). Paths work on the raw dict
-read from TOML, before validation; :func:`clik.scenario.parse_scenario`
+read from TOML, before validation; :func:`clik.scenarios.scenario.parse_scenario`
 validates the result.
 """
 
@@ -76,7 +76,7 @@ def substitute(data: dict[str, Any], values: dict[str, Any]) -> dict[str, Any]:
 
     Missing tables along a path are created (``solver.damping`` works when the
     base has no ``damping``); obstacles must exist by name. Whether the result
-    is a valid scenario is for :func:`clik.scenario.parse_scenario` to say.
+    is a valid scenario is for :func:`clik.scenarios.scenario.parse_scenario` to say.
 
     Raises:
         KeyPathError: A path goes through a value that is not a table, or names

@@ -16,7 +16,7 @@ position task ``w`` is in [m^m]; mixed units for a pose task.
 
 With a scenario (``ReachSpec.scenario``, ``clik reach --scenario``), the robot, its
 obstacles and its constraints come from the scenario file, and each point is solved
-with ``constraints=`` (:mod:`clik.constrained_solve`): a point whose unconstrained
+with ``constraints=`` (:mod:`clik.solving.constrained_solve`): a point whose unconstrained
 pose misses a constraint and that the constrained law cannot reach clear of them is
 *blocked*, a category of its own beside *unreachable*.
 
@@ -48,7 +48,7 @@ if TYPE_CHECKING:
 
     from clik.constraints import ConstraintSet
     from clik.model.robot import Robot
-    from clik.task import Task
+    from clik.tasks.task import Task
 
 __all__ = [
     "CHUNK",
@@ -122,14 +122,14 @@ def reach_objects(spec: ReachSpec) -> tuple[Robot, Task, ConstraintSet | None]:
 def _build(spec: ReachSpec) -> tuple[Robot, Task, ConstraintSet | None]:
     """Load the robot, build the task and (with a scenario) its constraints."""
     from clik.model.robot import Robot
-    from clik.task import Task
+    from clik.tasks.task import Task
 
     axes = list(spec.axes) if spec.axes else None
     if spec.scenario is None:
         robot = Robot.load(spec.robot, lock=spec.lock or None)
         return robot, Task(robot, spec.frame, spec.kind, axes), None
-    from clik.constraints.build import build_constraints
-    from clik.scenario import parse_scenario
+    from clik.scenarios.build_constraints import build_constraints
+    from clik.scenarios.scenario import parse_scenario
 
     scenario = parse_scenario(spec.scenario_data or {}, spec.scenario)
     source = scenario.robot
@@ -150,7 +150,7 @@ def solve_points(spec: ReachSpec, points: np.ndarray) -> dict[str, list[Any]]:
     """Solve each point (the Dask task); returns the map's columns for these points."""
     import pinocchio as pin
 
-    from clik.solve_mode import solve
+    from clik.solving.solve_mode import solve
 
     robot, task, constraints = reach_objects(spec)
     rotation = None if spec.orientation_rpy is None else pin.rpy.rpyToMatrix(*spec.orientation_rpy)

@@ -20,7 +20,7 @@ from typing import Any, Literal
 import numpy as np
 
 from clik.errors import InputError
-from clik.io import atomic_write
+from clik.outputs.io import atomic_write
 
 COLUMNS = (
     "x",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from clik.io import write_json
+from clik.outputs.io import write_json
 from clik.sweep.reach_data import ReachMap
 
 TABLE = "reach.parquet"

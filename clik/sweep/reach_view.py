@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clik.io import atomic_write
+from clik.outputs.io import atomic_write
 from clik.viz import palette
 from clik.viz.camera import default_view, is_planar
 from clik.viz.commands import (

@@ -28,7 +28,7 @@ same ``samples``), and that joint block is one more factor of the product.
 Every run gets a stable id: a hash of its parameters (the key paths and
 values), so the same run has the same id in any sweep. Its scenario is the
 base scenario's dict with the parameters substituted, validated by
-:func:`clik.scenario.parse_scenario` against the base file (relative paths
+:func:`clik.scenarios.scenario.parse_scenario` against the base file (relative paths
 still resolve there). Every run is validated when the sweep is loaded.
 """
 
@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from clik.errors import ScenarioError
-from clik.scenario import Scenario, parse_scenario
+from clik.scenarios.scenario import Scenario, parse_scenario
 from clik.schema import Table
 from clik.sweep.keypath import KeyPathError, from_scenario_key, leaves, split, substitute
 

@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from clik.errors import InputError, OutputExistsError
-from clik.io import write_json
+from clik.outputs.io import write_json
 
 MANIFEST = "sweep.json"
 PARQUET = "results.parquet"
@@ -281,7 +281,7 @@ class ResultStore:
 
     def write_run_files(self, run_id: str, summary: dict[str, Any], trajectory: bytes) -> Path:
         """``DIR/runs/<run_id>/summary.json`` and ``trajectory.npz`` (``--keep-trajectories``)."""
-        from clik.io import atomic_write
+        from clik.outputs.io import atomic_write
 
         folder = self.out / RUNS / run_id
         folder.mkdir(parents=True, exist_ok=True)

@@ -31,13 +31,13 @@ from collections import OrderedDict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from clik.scenario import parse_scenario
+from clik.scenarios.scenario import parse_scenario
 from clik.sweep.keypath import substitute
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
-    from clik.runner import Run
-    from clik.scenario import Scenario
+    from clik.scenarios.runner import Run
+    from clik.scenarios.scenario import Scenario
 
 TRACE_ENV = "CLIK_SWEEP_TRACE"
 """Environment variable: a folder where each computed run's id is logged (tests, debugging)."""
@@ -100,8 +100,8 @@ def robot_loads() -> int:
 
 
 def build_run(scenario: Scenario, robot: Robot) -> Run:
-    """:func:`clik.runner.build` on a robot loaded earlier (same errors, same objects)."""
-    from clik import runner
+    """:func:`clik.scenarios.runner.build` on a robot loaded earlier (same errors, same objects)."""
+    from clik.scenarios import runner
 
     return runner.build(scenario, robot=robot)
 

@@ -19,14 +19,14 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
-from clik.io import atomic_write
+from clik.outputs.io import atomic_write
 from clik.viz import palette
 from clik.viz.commands import Command, color_int, pack
 from clik.viz.scene import Geometry, build_scene
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
-    from clik.result import TrackingResult
+    from clik.outputs.result import TrackingResult
 
 
 def _viewer_js() -> Path:
@@ -169,7 +169,7 @@ def export_html(
         fps: Animation frames per second of run time [1/s]; fewer frames make
             smaller files.
         robot: The robot, when ``result.robot`` is not set (e.g. a result read
-            with :meth:`~clik.result.TrackingResult.load`).
+            with :meth:`~clik.outputs.result.TrackingResult.load`).
 
     Returns:
         The path written.

@@ -21,7 +21,7 @@ from clik.viz.target import load_target
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
-    from clik.result import TrackingResult
+    from clik.outputs.result import TrackingResult
 
 _server: MeshcatServer | None = None
 

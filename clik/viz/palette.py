@@ -2,7 +2,7 @@
 
 Every element that has a legend entry (:data:`LEGEND`) has a colour of its own:
 no two entries share a colour, and none is close to another or to the
-background (``tests/test_viz.py`` checks a CIELAB distance of at least 25
+background (``tests/viz/test_viz.py`` checks a CIELAB distance of at least 25
 between any two of them).
 """
 

@@ -30,7 +30,7 @@ from clik.viz.timeline import Timeline
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
-    from clik.result import TrackingResult
+    from clik.outputs.result import TrackingResult
 
 ROOT = "/meshcat/robot"
 """Scene path of the robot."""

@@ -38,7 +38,7 @@ from clik.viz.witness_layer import monitor_segments, row_segments
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
-    from clik.result import TrackingResult
+    from clik.outputs.result import TrackingResult
 
 Geometry = Literal["visual", "collision"]
 """Which of the robot's geometry models is drawn."""

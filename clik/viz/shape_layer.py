@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from clik.robot import Robot
+from clik.model.robot import Robot
 from clik.viz import palette
 from clik.viz.commands import (
     Command,

@@ -21,7 +21,7 @@ from typing import Any
 
 from clik.errors import ClikError, InputError
 from clik.model.robot import Robot
-from clik.result import TrackingResult
+from clik.outputs.result import TrackingResult
 
 TRAJECTORY_FILE = "trajectory.npz"
 """The result file of an output folder."""
@@ -42,7 +42,7 @@ def load_target(target: str | Path) -> TrackingResult:
     """
     path = Path(target)
     if path.is_file() and path.suffix == ".toml":
-        from clik.runner import build
+        from clik.scenarios.runner import build
 
         run = build(path)
         result = run.execute()
@@ -103,7 +103,7 @@ def rebuild_robot(result: TrackingResult, source: Path) -> Robot:
 
 def _scenario_robot(info: dict[str, Any]) -> dict[str, Any] | None:
     """The ``[robot]`` table of the run's scenario, when it can be found."""
-    from clik.scenario import load_scenario
+    from clik.scenarios.scenario import load_scenario
 
     file = info.get("scenario_file")
     if file and Path(file).is_file():

@@ -31,7 +31,7 @@ from clik.viz.timeline import Timeline
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
-    from clik.result import TrackingResult
+    from clik.outputs.result import TrackingResult
 
 ROOT = "/meshcat/witness"
 """Scene path of the witness segments."""

@@ -7,7 +7,7 @@
 #include <pinocchio/config.hpp>
 
 #include "bindings.hpp"
-#include "model_bridge.hpp"
+#include "model/model_bridge.hpp"
 
 namespace nb = nanobind;
 

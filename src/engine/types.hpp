@@ -26,10 +26,10 @@ using TaskMat =
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, MAX_TASK_ROWS, MAX_TASK_ROWS>;
 using TaskVec = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, MAX_TASK_ROWS, 1>;
 
-// The law, as clik/laws.py names it.
+// The law, as clik/loop/laws.py names it.
 enum class LawKind { transpose, nonlinear, pseudoinverse };
 
-// The law named as in clik/laws.py; std::invalid_argument for any other name.
+// The law named as in clik/loop/laws.py; std::invalid_argument for any other name.
 inline LawKind law_kind(const std::string& law) {
   if (law == "pseudoinverse") return LawKind::pseudoinverse;
   if (law == "nonlinear") return LawKind::nonlinear;

@@ -23,7 +23,7 @@
 #include "bindings.hpp"
 #include "constraints/constraint_set.hpp"
 #include "constraints/kinds.hpp"
-#include "model_bridge.hpp"
+#include "model/model_bridge.hpp"
 
 namespace nb = nanobind;
 

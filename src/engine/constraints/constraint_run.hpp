@@ -52,10 +52,10 @@
 #include "constraints/constraint_set.hpp"
 #include "constraints/kind.hpp"
 #include "constraints/kinds.hpp"
-#include "extended_task.hpp"
-#include "laws.hpp"
+#include "loop/laws.hpp"
+#include "constraints/violations.hpp"
+#include "tasks/extended_task.hpp"
 #include "types.hpp"
-#include "violations.hpp"
 
 namespace clik {
 

@@ -1,5 +1,5 @@
 // The dexterity row, (D1)-(D3) of docs/method.md, "Dexterity" (mirrors
-// clik/constraints/dexterity.py and clik/manipulability.py).
+// clik/constraints/dexterity.py and clik/tasks/manipulability.py).
 //
 // With J the task Jacobian (m, nv): the frame's LOCAL_WORLD_ALIGNED Jacobian
 // masked to the task's rows, the very rows 0..m of the extended task:

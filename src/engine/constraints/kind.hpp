@@ -44,9 +44,9 @@
 #include <pinocchio/multibody/model.hpp>
 
 #include "constraints/collision_scene.hpp"
-#include "extended_task.hpp"
+#include "constraints/violations.hpp"
+#include "tasks/extended_task.hpp"
 #include "types.hpp"
-#include "violations.hpp"
 
 namespace nanobind {
 class module_;

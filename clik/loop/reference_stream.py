@@ -1,0 +1,94 @@
+"""The reference of a run, sampled chunk by chunk for the tracking loop.
+
+A trajectory is sampled vectorised over a block of the time grid at a time
+(:data:`REFERENCE_CHUNK` samples), so a 10^6-sample run holds a few hundred
+kilobytes of reference instead of hundreds of megabytes. Every chunk is
+sampled once before the loop starts, so a trajectory that yields NaN or lacks
+what the task needs is refused before any computation; a run of at most
+:data:`KEEP_SAMPLES` samples keeps those chunks for the loop instead of sampling
+them again.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from clik.errors import InputError
+from clik.tasks.task import Task
+from clik.trajectory import Reference, Trajectory
+
+REFERENCE_CHUNK = 4096
+"""Samples per chunk of reference."""
+
+KEEP_SAMPLES = 65536
+"""Runs up to this many samples keep their sampled reference (about 10 MB for a pose task)."""
+
+Chunk = tuple[int, int, np.ndarray | None, np.ndarray | None, np.ndarray, np.ndarray]
+
+
+def task_reference(
+    task: Task, ref: Reference
+) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray]:
+    """Positions (N, 3), rotations (N, 3, 3) and the task rows' velocities (N, m)."""
+    P_d, R_d = ref.position, ref.rotation
+    if task.has_position and P_d is None:
+        raise InputError("trajectory", f"a position reference for the {task.kind} task")
+    if task.has_orientation and R_d is None:
+        raise InputError("trajectory", f"an orientation reference for the {task.kind} task")
+    V6 = np.zeros((ref.t.shape[0], 6))
+    if task.has_position:
+        V6[:, :3] = ref.linear_velocity
+    if task.has_orientation:
+        V6[:, 3:] = ref.angular_velocity
+    return P_d, R_d, np.ascontiguousarray(V6[:, task.rows])
+
+
+class ReferenceChunks:
+    """Chunks of a trajectory's reference on the time grid ``t``.
+
+    Args:
+        task: The task (which rows the reference must provide).
+        trajectory: The trajectory.
+        t: The run's time grid [s].
+        size: Samples per chunk.
+        center: A point [m] whose largest distance to the position reference is kept
+            in :attr:`farthest` (the reach check).
+    """
+
+    def __init__(
+        self,
+        task: Task,
+        trajectory: Trajectory,
+        t: np.ndarray,
+        size: int,
+        center: np.ndarray | None = None,
+    ) -> None:
+        self.task, self.trajectory, self.t, self.size = task, trajectory, t, size
+        self.center = center
+        self.farthest = (0.0, 0.0)
+        """Largest distance [m] of the position reference from ``center``, and its time [s]."""
+        self._kept: dict[int, Chunk] = {}
+        keep = t.shape[0] <= KEEP_SAMPLES
+        self._first = self._sample(0)
+        for c0 in range(size, t.shape[0], size):  # validate the rest before any step
+            chunk = self._sample(c0)
+            if keep:
+                self._kept[c0] = chunk
+
+    def _sample(self, c0: int) -> Chunk:
+        c1 = min(c0 + self.size, self.t.shape[0])
+        P_d, R_d, FF = task_reference(self.task, self.trajectory.sample(self.t[c0:c1]))
+        at_rest = ~np.any(FF != 0.0, axis=1)
+        if self.center is not None and P_d is not None:
+            dist = np.linalg.norm(P_d - self.center, axis=1)
+            i = int(np.argmax(dist))
+            if dist[i] > self.farthest[0]:
+                self.farthest = (float(dist[i]), float(self.t[c0 + i]))
+        return c0, c1, P_d, R_d, FF, at_rest
+
+    def load(self, c0: int) -> Chunk:
+        """The chunk starting at sample ``c0``: ``(c0, c1, P_d, R_d, FF, at_rest)``."""
+        if c0 == 0:
+            return self._first
+        kept = self._kept.get(c0)
+        return kept if kept is not None else self._sample(c0)

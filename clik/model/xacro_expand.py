@@ -1,0 +1,307 @@
+"""Xacro robot descriptions: expanded to URDF text, reading only the robot's own folders.
+
+:func:`expand_xacro` runs the ``xacro`` package (PyPI) on a ``.xacro`` file and
+returns the URDF text, which :meth:`clik.Robot.load` then checks like any URDF
+(:func:`clik.model.urdf_check.check_urdf`). Without ROS, xacro cannot resolve
+``$(find pkg)``; here a package ``pkg`` is the folder ``pkg`` in one of the
+``package_dirs``, as for ``package://pkg/...`` meshes.
+
+Xacro reads files (``<xacro:include>``, ``xacro.load_yaml``) and keeps its state in
+module globals. For the length of one call, under a lock, clik replaces:
+
+- ``substitution_args._eval_find`` (and ``find`` in ``$(eval ...)``): the
+  ``package_dirs`` lookup above;
+- ``xacro.parse`` and xacro's ``open``: every file xacro reads must resolve
+  (symlinks followed) inside a *root*: the xacro file's folder, the package
+  folder that holds it, or a package found by ``$(find)``; XML files are read
+  strictly first (:func:`clik.model.urdf_check.parse_xml`: no entities, no external
+  DTD, no XInclude). Xacro never fetches anything over the network.
+
+Everything is put back when the call returns or raises, and xacro's messages
+on stderr become :class:`XacroWarning` warnings.
+
+Errors: a ``$(arg name)`` that is neither given nor declared with a default,
+or a given argument the file never declares nor uses, is an
+:class:`~clik.errors.InputError` on ``xacro_args``; an unknown package an
+:class:`~clik.errors.InputError` on ``package_dirs``; a file outside the roots
+or any xacro error (syntax, undefined property, ...) a
+:class:`~clik.errors.RobotLoadError` naming the file.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import threading
+import warnings
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from clik.errors import ClikError, InputError, RobotLoadError
+from clik.model.urdf_check import parse_xml
+
+XACRO_SUFFIX = ".xacro"
+"""Files whose name ends with this (``arm.urdf.xacro``) are expanded by xacro."""
+
+_LOCK = threading.Lock()
+"""Xacro keeps its state in module globals: one expansion at a time per process."""
+
+
+class XacroWarning(UserWarning):
+    """Xacro printed a message (e.g. a redefined property) while expanding a file."""
+
+
+def is_xacro(path: str | Path) -> bool:
+    """Whether ``path`` names a xacro file (its name ends with ``.xacro``)."""
+    return Path(path).name.endswith(XACRO_SUFFIX)
+
+
+def check_xacro_args(xacro_args: object) -> dict[str, str]:
+    """``xacro_args`` as a dict of strings (argument name -> value).
+
+    Raises:
+        InputError: It is not a mapping of strings to strings.
+    """
+    if xacro_args is None:
+        return {}
+    if not isinstance(xacro_args, Mapping) or not all(
+        isinstance(k, str) and isinstance(v, str) for k, v in xacro_args.items()
+    ):
+        raise InputError(
+            "xacro_args", "a table of strings, argument name -> value (quote numbers)", xacro_args
+        )
+    return dict(xacro_args)
+
+
+def expand_xacro(
+    path: str | Path,
+    xacro_args: Mapping[str, str] | None = None,
+    package_dirs: Sequence[str | Path] = (),
+) -> str:
+    """Expand a xacro file into URDF text.
+
+    Args:
+        path: The ``.xacro`` file.
+        xacro_args: Values of its ``<xacro:arg>`` / ``$(arg ...)`` arguments.
+        package_dirs: Folders holding the packages named by ``$(find pkg)``.
+
+    Returns:
+        The expanded XML (a URDF, not yet checked).
+
+    Raises:
+        InputError: A bad ``xacro_args`` (not strings; an argument missing or
+            unknown) or a ``$(find pkg)`` with no folder ``pkg`` in ``package_dirs``.
+        RobotLoadError: The file (or a file it reads) is missing, outside its
+            roots, not strict XML, or xacro cannot expand it.
+    """
+    args = check_xacro_args(xacro_args)
+    file = Path(path)
+    if not file.is_file():
+        raise RobotLoadError(file, "is a folder, not a file" if file.is_dir() else "file not found")
+    scope = _Scope(file.resolve(), [Path(d) for d in package_dirs])
+    given = _TrackedArgs(args)
+    messages = io.StringIO()
+    with _LOCK, _patched_xacro(scope) as xacro, contextlib.redirect_stderr(messages):
+        try:
+            document = xacro.process_file(str(scope.file), mappings=given, verbosity=0)
+            text: str = document.toprettyxml(indent="  ")
+        except Exception as error:  # xacro raises many kinds: all become clik errors
+            raise _clik_error(error, scope, given, list(xacro.filestack or [])) from None
+    if messages.getvalue().strip():
+        warnings.warn(
+            XacroWarning(f"xacro, expanding {file}: {' '.join(messages.getvalue().split())}"),
+            stacklevel=2,
+        )
+    unknown = sorted(set(args) - given.asked)
+    if unknown:
+        known = ", ".join(repr(a) for a in sorted(given.asked)) or "none"
+        raise InputError(
+            "xacro_args",
+            f"arguments that {file} declares or uses ({known})",
+            got={k: args[k] for k in unknown},
+        )
+    return text
+
+
+class _TrackedArgs(dict[str, str]):
+    """Xacro's argument table, remembering which names xacro asked for.
+
+    Xacro asks ``name in args`` for each ``<xacro:arg>`` and reads ``args[name]``
+    for each ``$(arg name)`` or ``xacro.arg(name)``: a given name never asked for
+    is unknown to the file, and a name read but absent (``missing``) is an
+    argument the file needs when the expansion then fails on it.
+    """
+
+    def __init__(self, given: Mapping[str, str]) -> None:
+        super().__init__(given)
+        self.asked: set[str] = set()
+        self.missing: set[str] = set()
+
+    def __contains__(self, name: object) -> bool:
+        if isinstance(name, str):
+            self.asked.add(name)
+        return super().__contains__(name)
+
+    def __getitem__(self, name: str) -> str:
+        self.asked.add(name)
+        if not super().__contains__(name):
+            self.missing.add(name)
+        return super().__getitem__(name)
+
+
+@dataclass
+class _Scope:
+    """What one expansion may read: its file, the package folders, the roots found.
+
+    Attributes:
+        file: The xacro file (symlinks resolved).
+        package_dirs: Folders holding packages (``$(find pkg)`` is ``<dir>/pkg``).
+        roots: Folders (resolved) whose files xacro may read.
+    """
+
+    file: Path
+    package_dirs: list[Path]
+    roots: list[Path] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self._add_root(self.file.parent)
+        for folder in self.package_dirs:  # the package holding the file, if any
+            base = folder.resolve()
+            if self.file.is_relative_to(base):
+                package = base / self.file.relative_to(base).parts[0]
+                if package.is_dir():
+                    self._add_root(package)
+
+    def _add_root(self, folder: Path) -> None:
+        """Let xacro read the files under ``folder`` (resolved), unless already allowed."""
+        if not any(folder.is_relative_to(root) for root in self.roots):
+            self.roots[:] = [r for r in self.roots if not r.is_relative_to(folder)] + [folder]
+
+    def find(self, package: str) -> str:
+        """The folder of ``package`` (``$(find package)``), now a root too.
+
+        Raises:
+            InputError: No folder ``package`` in ``package_dirs`` (or a name with a path in it).
+        """
+        named = package not in ("", ".", "..") and not any(c in package for c in "/\\")
+        for folder in self.package_dirs if named else []:
+            candidate = folder / package
+            if candidate.is_dir():
+                resolved = candidate.resolve()
+                self._add_root(resolved)
+                return str(resolved)
+        searched = ", ".join(str(d) for d in self.package_dirs) or "none given"
+        raise InputError(
+            "package_dirs",
+            f"a folder holding the package {package!r} named by $(find {package}) in "
+            f"{self.file} (package folders searched: {searched})",
+        )
+
+    def readable(self, name: str) -> Path:
+        """The file ``name`` (symlinks resolved) when it lies inside a root.
+
+        Raises:
+            RobotLoadError: It lies outside every root.
+        """
+        resolved = Path(name).resolve()
+        if not any(resolved.is_relative_to(root) for root in self.roots):
+            roots = ", ".join(str(r) for r in self.roots)
+            raise RobotLoadError(
+                self.file,
+                f"xacro would read {name} (resolved: {resolved}), which leaves the "
+                f"folders a xacro file may read from ({roots}): its own folder, its "
+                "package and the packages found by $(find)",
+            )
+        return resolved
+
+
+@contextlib.contextmanager
+def _patched_xacro(scope: _Scope) -> Iterator[Any]:
+    """Xacro with ``$(find)``, file reading and its state scoped to ``scope``.
+
+    Yields the ``xacro`` module; everything changed is put back on exit.
+    """
+    import builtins
+
+    import xacro
+    from xacro import substitution_args
+
+    original_parse = xacro.parse
+
+    def parse(inp: Any, filename: str | None = None) -> Any:
+        if inp is None and filename is not None:
+            file = scope.readable(filename)
+            try:
+                parse_xml(file)  # strict XML first (no entities, ...)
+            except RobotLoadError as error:
+                if file == scope.file:
+                    raise
+                raise RobotLoadError(
+                    filename, f"{error.problem} (included by {scope.file})", error.line
+                ) from None
+        return original_parse(inp, filename)
+
+    def guarded_open(name: Any, *args: Any, **kwargs: Any) -> Any:
+        return builtins.open(scope.readable(str(name)), *args, **kwargs)
+
+    saved = {
+        "parse": xacro.parse,
+        "filestack": xacro.filestack,
+        "macrostack": xacro.macrostack,
+        "all_includes": xacro.all_includes,
+        "verbosity": xacro.verbosity,
+    }
+    saved_find = (substitution_args._eval_find, substitution_args._eval_dict["find"])
+    xacro.parse = parse
+    xacro.open = guarded_open  # shadows the builtin inside xacro only
+    xacro.all_includes = []
+    substitution_args._eval_find = substitution_args._eval_dict["find"] = scope.find
+    try:
+        yield xacro
+    finally:
+        for name, value in saved.items():
+            setattr(xacro, name, value)
+        del xacro.open
+        substitution_args._eval_find, substitution_args._eval_dict["find"] = saved_find
+        xacro.substitution_args_context["arg"] = {}
+
+
+def _causes(error: BaseException) -> Iterator[BaseException]:
+    """``error`` and what it wraps (xacro's ``exc``, Python's cause and context)."""
+    seen: set[int] = set()
+    todo: list[BaseException | None] = [error]
+    while todo:
+        current = todo.pop(0)
+        if current is None or id(current) in seen:
+            continue
+        seen.add(id(current))
+        yield current
+        wrapped = getattr(current, "exc", None)
+        todo += [wrapped if isinstance(wrapped, BaseException) else None]
+        todo += [current.__cause__, current.__context__]
+
+
+def _clik_error(
+    error: Exception, scope: _Scope, given: _TrackedArgs, files: list[str]
+) -> ClikError:
+    """The clik error for an exception raised while xacro expanded ``scope.file``."""
+    from xacro.substitution_args import ArgException
+
+    for cause in _causes(error):
+        if isinstance(cause, ClikError):
+            return cause
+        is_key = isinstance(cause, KeyError) and cause.args and cause.args[0] in given.missing
+        if isinstance(cause, ArgException) or is_key:
+            name = str(cause.args[0])
+            return InputError(
+                "xacro_args",
+                f"a value for the xacro argument {name!r}: {scope.file} uses it and "
+                f'declares no default (<xacro:arg name="{name}" default="..."/>)',
+                got=dict(given),
+            )
+    message = " ".join(str(error).split()) or type(error).__name__
+    where = [f for f in files if f and Path(f).resolve() != scope.file]
+    inside = f" (in {where[-1]}, included from {scope.file})" if where else ""
+    return RobotLoadError(scope.file, f"xacro cannot expand it{inside}: {message}")

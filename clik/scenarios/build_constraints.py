@@ -1,0 +1,133 @@
+"""Build a :class:`ConstraintSet` from a scenario's ``[[obstacles]]`` and ``[constraints]``."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from clik.constraints.constraint_set import ConstraintSet
+from clik.constraints.dexterity import Dexterity
+from clik.constraints.joint_limits import JointLimits, convert_override
+from clik.constraints.kind import ConstraintKind
+from clik.constraints.obstacle import Obstacle
+from clik.constraints.registry import TABLE_KINDS
+from clik.errors import (
+    ClikError,
+    FrameNotFound,
+    GeometryError,
+    InputError,
+    JointNotFound,
+    ScenarioError,
+)
+
+if TYPE_CHECKING:
+    from clik.model.robot import Robot
+    from clik.scenarios.scenario import Scenario
+    from clik.tasks.task import Task
+
+
+def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> ConstraintSet:
+    """The scenario's obstacles (always monitored) and enabled constraint rows.
+
+    Joint-range rows (:class:`JointLimits`): ``threshold`` [rad] is the revolute
+    joints' ``d_q`` and ``prismatic_threshold`` [m] the prismatic joints' (each
+    capped at a quarter of the joint's range); an override is read in the
+    table's ``unit`` for a revolute joint and in metres for a prismatic one.
+    The dexterity row (:class:`Dexterity`) keeps the task's manipulability above
+    ``[constraints.dexterity] threshold``.
+    """
+    obstacles = []
+    for i, spec in enumerate(scenario.obstacles):
+        kwargs = {k: spec[k] for k in ("radius", "size", "length", "file", "scale") if k in spec}
+        try:
+            obstacles.append(
+                Obstacle(
+                    spec["name"],
+                    spec["shape"],
+                    spec["position"],
+                    spec["rpy"],
+                    spec["velocity"],
+                    spec["threshold"],
+                    **kwargs,
+                )
+            )
+        except (InputError, GeometryError) as exc:
+            raise ScenarioError(scenario.file, f"obstacles[{i}]", str(exc)) from None
+    c = scenario.constraints
+    obs, jl_spec, sc = c["obstacles"], c["joint_limits"], c["self_collision"]
+    joint_limits = None
+    if jl_spec["enabled"] or jl_spec["override"]:  # a bad override is an error even when off
+        try:
+            override = jl_spec["override"]
+            if "override_as_written" in jl_spec:  # parse_scenario's; older dicts: radians
+                override = convert_override(
+                    robot, jl_spec["override_as_written"], jl_spec.get("unit", "rad")
+                )
+            joint_limits = JointLimits(
+                robot,
+                jl_spec["threshold"],
+                override,
+                prismatic_threshold=jl_spec.get("prismatic_threshold"),
+            )
+        except JointNotFound as exc:
+            raise ScenarioError(
+                scenario.file, "constraints.joint_limits.override", str(exc)
+            ) from None
+        except InputError as exc:
+            message = str(exc).removeprefix(f"{exc.field}: ")  # the key is said once
+            raise ScenarioError(scenario.file, exc.field, message) from None
+        if not jl_spec["enabled"]:
+            joint_limits = None
+    dx_spec = c.get("dexterity") or {"enabled": False, "gain": None}
+    kinds = _table_kinds(scenario, robot)
+    release = obs["release"] or c["release"]
+    try:
+        return ConstraintSet(
+            robot,
+            obstacles=obstacles,
+            obstacle_rows=obs["enabled"],
+            obstacle_threshold=obs["threshold"],
+            obstacle_gain=obs["gain"],
+            form=obs["form"],
+            links=obs["links"],
+            joint_limits=joint_limits,
+            joint_gain=jl_spec["gain"],
+            self_collision=sc["enabled"],
+            self_threshold=sc["threshold"],
+            self_gain=sc["gain"],
+            dexterity=_dexterity(scenario, dx_spec),
+            dexterity_gain=dx_spec["gain"],
+            kinds=kinds,
+            release=release,
+            hysteresis=c["hysteresis"],
+            max_active=c["max_active"],
+        )
+    except ClikError as exc:
+        raise ScenarioError(scenario.file, "constraints", str(exc)) from None
+
+
+def _dexterity(scenario: Scenario, spec: dict[str, Any]) -> Dexterity | None:
+    """The ``[constraints.dexterity]`` row (:class:`Dexterity`), or None when not enabled."""
+    if not spec["enabled"]:
+        return None
+    try:
+        return Dexterity(spec["threshold"])
+    except InputError as exc:
+        raise ScenarioError(scenario.file, exc.field, str(exc)) from None
+
+
+def _table_kinds(scenario: Scenario, robot: Robot) -> list[ConstraintKind]:
+    """The ``[[constraints.<table>]]`` kinds (:data:`~clik.constraints.registry.TABLE_KINDS`)."""
+    out: list[ConstraintKind] = []
+    tables = scenario.constraints.get("kinds", {})
+    for kind in TABLE_KINDS:
+        for i, spec in enumerate(tables.get(kind.table, [])):
+            where = f"constraints.{kind.table}[{i}]"
+            try:
+                out.append(kind.from_spec(robot, spec))
+            except FrameNotFound as exc:
+                raise ScenarioError(scenario.file, f"{where}.frame", str(exc)) from None
+            except InputError as exc:
+                field = exc.field.replace(f"constraints.{kind.table}", where, 1)
+                message = str(exc).removeprefix(f"{exc.field}: ")
+                raise ScenarioError(scenario.file, field, message) from None
+    return out

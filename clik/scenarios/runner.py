@@ -1,0 +1,245 @@
+"""Turn a validated :class:`~clik.scenarios.scenario.Scenario` into objects, and run it.
+
+Errors raised while building (an unknown frame, an infeasible trajectory
+timing, an unknown joint in a lock or override) are re-raised as
+:class:`~clik.errors.ScenarioError` naming the scenario file and key path.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from clik.errors import (
+    ClikError,
+    FrameNotFound,
+    InfeasibleError,
+    InputError,
+    JointNotFound,
+    ScenarioError,
+)
+from clik.loop.tracking import ProgressCallback, Tracker
+from clik.model.reach import reach_bound
+from clik.model.robot import Robot
+from clik.outputs.result import TrackingResult
+from clik.scenarios.scenario import Scenario, check_dt, load_scenario
+from clik.schema import Table
+from clik.speed.speed_limits import SpeedLimits
+from clik.speed.velocity_limits import run_within_limits
+from clik.tasks.task import Task
+from clik.trajectory import Circle, Hold, Line, PoseTrajectory, Slerp, Trajectory, Waypoints
+
+
+@dataclass
+class Run:
+    """Everything a scenario builds: robot, task, trajectory, tracker and start.
+
+    ``speed_limits`` is set when ``[constraints.velocity_limits]`` is enabled: the run
+    is then re-timed until the joint speeds are within limits
+    (:func:`clik.speed.velocity_limits.run_within_limits`).
+    """
+
+    scenario: Scenario
+    robot: Robot
+    task: Task
+    trajectory: Trajectory
+    tracker: Tracker
+    q0: np.ndarray
+    speed_limits: SpeedLimits | None = None
+
+    def execute(self, progress: ProgressCallback | None = None) -> TrackingResult:
+        """Run the tracking loop (in re-timing passes when ``speed_limits`` is set)."""
+        solver = self.scenario.solver
+        kwargs = {"record_every": solver["record_every"], "settle": solver["settle"]}
+        if self.speed_limits is None:
+            result = self.tracker.run(self.trajectory, self.q0, progress=progress, **kwargs)
+        else:
+            result = run_within_limits(
+                self.tracker, self.trajectory, self.q0, self.speed_limits, progress=progress,
+                **kwargs,
+            )  # fmt: skip
+        result.info["scenario"] = self.scenario.name
+        result.info["scenario_file"] = str(self.scenario.file.resolve())
+        result.info["robot_source"] = self.scenario.robot["source"]
+        result.info["robot_lock"] = dict(self.scenario.robot["lock"])
+        cset = self.tracker.constraints
+        scene = None if cset is None else cset.scene
+        if scene is not None:  # hulls coal could not build: not checked against obstacles
+            result.info["unmonitored_geometries"] = list(scene.skipped_geometries)
+        if self.scenario.robot.get("xacro_args"):
+            result.info["robot_xacro_args"] = dict(self.scenario.robot["xacro_args"])
+        return result
+
+
+def _where(scenario: Scenario, key: str, exc: ClikError) -> ScenarioError:
+    message = str(exc)
+    field = getattr(exc, "field", None)
+    if field and message.startswith(f"{field}: "):  # do not repeat the field
+        message = message[len(field) + 2 :]
+    return ScenarioError(scenario.file, key, message)
+
+
+def _robot_key(exc: ClikError) -> str:
+    """The ``[robot]`` key a robot's loading error is about (``lock`` unless it says)."""
+    field = str(getattr(exc, "field", ""))
+    for key in ("xacro_args", "package_dirs"):
+        if field.startswith(key):
+            return f"robot.{key}"
+    return "robot.lock"
+
+
+def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
+    """Build the objects of a scenario (loads the robot; computes nothing else).
+
+    Args:
+        scenario: A scenario or the path of a scenario file.
+        robot: The scenario's robot, loaded earlier (e.g. once per sweep worker);
+            default: load it from ``[robot]``.
+    """
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    spec = scenario.robot
+    if robot is None:
+        try:
+            robot = Robot.load(
+                spec["source"],
+                package_dirs=spec["package_dirs"] or None,
+                lock=spec["lock"] or None,
+                xacro_args=spec.get("xacro_args") or None,
+            )
+        except (JointNotFound, InputError) as exc:
+            raise _where(scenario, _robot_key(exc), exc) from None
+        except ClikError as exc:
+            raise _where(scenario, "robot.source", exc) from None
+    try:
+        q0 = robot.check_configuration(
+            robot.q_reference if scenario.initial_q is None else scenario.initial_q, "initial.q"
+        )
+    except InputError as exc:
+        raise _where(scenario, "initial.q", exc) from None
+    try:
+        robot.check_within_limits(q0, "initial.q")
+    except InfeasibleError as exc:
+        raise InfeasibleError(f"{scenario.file}: {exc.field}", exc.problem) from None
+    try:
+        task = Task(robot, scenario.task["frame"], scenario.task["kind"], scenario.task["axes"])
+    except FrameNotFound as exc:
+        raise _where(scenario, "task.frame", exc) from None
+    except InputError as exc:
+        raise _where(scenario, exc.field, exc) from None
+    start = task.placement(q0)
+    try:
+        trajectory = build_trajectory(scenario.trajectory, task, start)
+    except InputError as exc:
+        _check_goal_reach(scenario, robot, task)  # name the real cause first
+        raise _where(scenario, f"trajectory.{exc.field}", exc) from None
+    if scenario.trajectory["duration"] is None:  # timed by cruise_speed: known only now
+        check_dt(
+            Table({}, scenario.file, "solver"), scenario.solver["dt"], float(trajectory.duration)
+        )
+    constraints = None
+    if scenario.has_constraints:
+        from clik.scenarios.build_constraints import build_constraints
+
+        constraints = build_constraints(scenario, robot, task)
+    solver = scenario.solver
+    try:
+        tracker = Tracker(
+            task,
+            law=solver["law"],
+            gain=solver["gain"],
+            dt=solver["dt"],
+            damping=solver["damping"],
+            constraints=constraints,
+            engine=solver["engine"],
+        )
+    except InputError as exc:
+        key = "solver.law" if exc.field == "constraints" else f"solver.{exc.field}"
+        raise _where(scenario, key, exc) from None
+    try:  # a run too long, or a record too large for memory: said before any output
+        tracker.check_size(
+            float(trajectory.duration) + solver["settle"], int(solver["record_every"])
+        )
+    except InputError as exc:
+        raise _where(scenario, f"solver.{exc.field}", exc) from None
+    return Run(scenario, robot, task, trajectory, tracker, q0, _speed_limits(scenario, robot))
+
+
+def _speed_limits(scenario: Scenario, robot: Robot) -> SpeedLimits | None:
+    """The scenario's ``[constraints.velocity_limits]``, checked against the robot (or None)."""
+    spec = scenario.velocity_limits
+    if not spec.get("enabled"):
+        return None
+    key = "constraints.velocity_limits"
+    settings = {k: spec[k] for k in ("scale", "acceleration", "margin", "max_passes", "window")}
+    try:
+        limits = SpeedLimits(**settings)
+        limits.bounds(robot)  # an unknown joint or a robot without limits: now, not after a run
+    except JointNotFound as exc:
+        raise _where(scenario, f"{key}.acceleration", exc) from None
+    except InputError as exc:
+        raise _where(scenario, exc.field.replace("velocity_limits", key, 1), exc) from None
+    return limits
+
+
+def _check_goal_reach(scenario: Scenario, robot: Robot, task: Task) -> None:
+    """Raise :class:`InfeasibleError` when the scenario's goal lies beyond the frame's reach.
+
+    A trajectory that cannot be built (e.g. its cruise speed cannot cover the distance in
+    its duration) often has an unreachable goal: that is the error worth reading.
+    """
+    goal = scenario.trajectory.get("goal")
+    if goal is None or not task.has_position:
+        return
+    center, reach, first = reach_bound(robot, task.frame_id)
+    distance = float(np.linalg.norm(np.asarray(goal, dtype=float)[:3] - center))
+    if math.isfinite(reach) and distance > reach + 1e-9:
+        raise InfeasibleError(
+            f"{scenario.file}: trajectory.goal",
+            f"the goal is out of reach: it lies {distance:.4g} m from joint {first!r}, farther "
+            f"than the {reach:.4g} m that frame {task.frame!r} can reach",
+        )
+
+
+def build_trajectory(spec: dict[str, Any], task: Task, start: pin.SE3) -> Trajectory:
+    """The trajectory of a scenario's ``[trajectory]`` table, starting at the frame's pose."""
+    p0 = start.translation.copy() if spec["start"] is None else np.asarray(spec["start"])
+    kind, duration, speed = spec["kind"], spec["duration"], spec.get("cruise_speed")
+    position: Trajectory
+    if kind == "line":
+        position = Line(p0, spec["goal"], duration=duration, cruise_speed=speed)
+    elif kind == "circle":
+        position = Circle.through(
+            p0, spec["center"], spec["normal"], spec["angle"], duration=duration, cruise_speed=speed
+        )
+    elif kind == "waypoints":
+        points = np.vstack([p0, np.asarray(spec["points"])])
+        position = Waypoints(
+            points, duration=duration, cruise_speed=speed, blend_radius=spec["blend_radius"]
+        )
+    else:
+        goal = p0 if spec["goal"] is None else np.asarray(spec["goal"])
+        position = Hold(position=goal, duration=duration)
+    if not task.has_orientation:
+        return position
+    R0 = start.rotation.copy()
+    rpy = spec["goal_rpy"]
+    if rpy is None:
+        orientation: Trajectory = Hold(rotation=R0, duration=position.duration)
+    else:
+        orientation = Slerp(R0, pin.rpy.rpyToMatrix(*rpy), duration=position.duration)
+    if not task.has_position:
+        return orientation
+    return PoseTrajectory(position, orientation)
+
+
+def run_scenario(
+    scenario: Scenario | str | Path, progress: ProgressCallback | None = None
+) -> TrackingResult:
+    """Load, build and run a scenario file; returns the tracking result."""
+    return build(scenario).execute(progress)

@@ -1,0 +1,491 @@
+"""Scenario files: one TOML file names everything a run needs.
+
+The keys are a contract (see the README). Relative paths resolve against the
+scenario file's folder. A scenario is validated completely before anything
+is computed: an unknown key, a wrong type, a missing required field or an
+out-of-range value raises :class:`~clik.errors.ScenarioError` naming the file,
+the key path (e.g. ``trajectory.duration``) and what was expected.
+
+Angles are given in the table's ``unit`` (``"rad"`` by default, or
+``"deg"``) and converted once, here, except joint values: ``unit`` applies to
+revolute (and continuous) joints only, prismatic joints' values are metres, and
+which joint is which is known only with the robot. So ``initial.q`` is kept as
+a :class:`~clik.model.joints.JointValues` (the values as written and their unit) that
+:meth:`Robot.check_configuration <clik.model.robot.Robot.check_configuration>`
+converts per joint, and ``[constraints.joint_limits]`` keeps its overrides as written
+beside their conversion to radians, for :func:`~clik.scenarios.build_constraints.build_constraints`
+to pick per joint.
+
+A scenario is data only: TOML has no code, no includes and no variables, and
+no key here names a file to read but ``robot.source``, ``robot.package_dirs``
+and an obstacle's mesh ``file``: paths the user chose (absolute, or relative
+to the scenario's folder; URLs are refused, nothing is fetched). A xacro
+``robot.source`` (``.xacro``) takes ``robot.xacro_args``, a table of strings.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from clik.bounds import MAX_STEPS, SCALE_RANGE
+from clik.constraints.registry import TABLE_KINDS
+from clik.engine import ENGINES
+from clik.errors import ScenarioError
+from clik.model.joints import JointValues
+from clik.model.xacro_expand import is_xacro
+from clik.schema import (
+    MAX_ANGLE,
+    MAX_GAIN_DT,
+    MAX_JOINT_VALUE,
+    MAX_LENGTH,
+    MAX_SPEED,
+    MIN_DURATION,
+    MIN_SAMPLES,
+    Table,
+)
+from clik.speed.speed_limits import MAX_PASSES, MAX_SCALE
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+TRAJECTORY_KINDS = ("line", "circle", "waypoints", "hold")
+
+SHAPES = ("sphere", "box", "capsule", "cylinder", "mesh")
+UNITS = ("rad", "deg")
+
+
+PRISMATIC_THRESHOLD = 0.005
+"""Default ``[constraints.joint_limits] prismatic_threshold`` [m]."""
+
+
+def _angle_scale(table: Table) -> float:
+    return math.pi / 180.0 if table.string("unit", "rad", UNITS) == "deg" else 1.0
+
+
+@dataclass
+class Scenario:
+    """A validated scenario. Angles are in radians, lengths in metres, times in seconds.
+
+    Joint values are the exception (see the module's docstring): ``initial_q`` is
+    a :class:`~clik.model.joints.JointValues` (the values as written and their ``unit``)
+    or None for the reference configuration, and
+    ``constraints["joint_limits"]`` has ``override`` (scaled as angles [rad]),
+    ``override_as_written`` (in ``unit`` for revolute joints, metres for
+    prismatic ones), ``unit``, ``threshold`` [rad] (revolute joints) and
+    ``prismatic_threshold`` [m].
+    """
+
+    file: Path
+    name: str
+    robot: dict[str, Any]
+    initial_q: JointValues | None
+    task: dict[str, Any]
+    trajectory: dict[str, Any]
+    solver: dict[str, Any]
+    obstacles: list[dict[str, Any]] = field(default_factory=list)
+    constraints: dict[str, Any] = field(default_factory=dict)
+    velocity_limits: dict[str, Any] = field(default_factory=dict)
+    """The ``[constraints.velocity_limits]`` table (:func:`_velocity_limits`), kept apart from
+    ``constraints`` because it adds no constraint row: it re-times the reference."""
+    raw: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    @property
+    def folder(self) -> Path:
+        """Folder that relative paths resolve against."""
+        return self.file.parent
+
+    @property
+    def has_constraints(self) -> bool:
+        """Whether the run needs a constraint set: obstacles, an enabled table, or a kind's."""
+        tables = self.constraints.values()
+        return bool(
+            self.obstacles
+            or any(c.get("enabled") for c in tables if isinstance(c, dict))
+            or any(self.constraints.get("kinds", {}).values())
+        )
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario file."""
+    path = Path(path)
+    if not path.is_file():
+        raise ScenarioError(path, "", "no such scenario file")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8").removeprefix("\ufeff"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ScenarioError(path, "", f"not valid TOML ({exc})") from None
+    except RecursionError:  # tomllib recurses on nested arrays and inline tables
+        raise ScenarioError(
+            path, "", "not valid TOML (arrays or tables nested too deeply)"
+        ) from None
+    return parse_scenario(data, path)
+
+
+def _resolve(folder: Path, value: str) -> str:
+    p = Path(value).expanduser()
+    return str(p if p.is_absolute() else (folder / p))
+
+
+def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
+    """Validate a scenario given as a dict (as read from TOML)."""
+    file = Path(file)
+    folder = file.parent
+    top = Table(data, file)
+    name = top.string("name", file.stem)
+
+    robot = _robot(top.table("robot", required=True), folder)
+
+    ini = top.table("initial")
+    unit = ini.string("unit", "rad", UNITS)
+    q_raw = ini.raw("q", "reference")
+    q_bound = MAX_JOINT_VALUE / _angle_scale(ini)
+    initial_q = None if q_raw == "reference" else JointValues(ini.vector("q", bound=q_bound), unit)
+    ini.done()
+
+    tsk = top.table("task", required=True)
+    task = {
+        "frame": tsk.string("frame"),
+        "kind": tsk.string("kind", "pose", ("position", "orientation", "pose")),
+        "axes": _strings(tsk, "axes") or None,
+    }
+    if tsk.has("axes") and task["axes"] is None:
+        raise tsk.error("axes", "a non-empty list of axis names (omit it for every axis)", [])
+    tsk.done()
+    has_orientation = task["kind"] != "position" and (
+        task["axes"] is None or any(a.startswith("r") for a in task["axes"])
+    )
+
+    trajectory = _trajectory(top.table("trajectory", required=True), folder, has_orientation)
+
+    solver = _solver(top.table("solver"), trajectory["duration"])
+
+    obstacles = [_obstacle(t, folder) for t in top.tables("obstacles")]
+    names = [o["name"] for o in obstacles]
+    if len(set(names)) != len(names):
+        raise ScenarioError(file, "obstacles", f"expected distinct obstacle names, got {names}")
+    constraints = _constraints(top.table("constraints"), solver["dt"])
+    velocity_limits = constraints.pop("velocity_limits")
+    top.done()
+    return Scenario(
+        file, name, robot, initial_q, task, trajectory, solver, obstacles, constraints,
+        velocity_limits=velocity_limits, raw=data,
+    )  # fmt: skip
+
+
+def _gain(table: Table, name: str, dt: float, default: Any = None) -> Any:
+    """A gain [1/s] (> 0), a number or (``per_row``) a list, with ``gain * dt <= MAX_GAIN_DT``."""
+    value = table.raw(name, default)
+    if isinstance(value, list):
+        gains = table.vector(name)
+        if any(g <= 0 for g in gains):
+            raise table.error(name, "positive numbers [1/s]", gains)
+    else:
+        gains = table.number(name, default, minimum=0.0, strict=True, unit="[1/s]")
+        if gains is None:
+            return None
+    if max(gains if isinstance(gains, list) else [gains]) * dt > MAX_GAIN_DT:
+        raise table.error(
+            name,
+            f"a gain [1/s] with gain * solver.dt <= {MAX_GAIN_DT:g} (solver.dt = {dt:g} s; "
+            "law (10) is stable only for gain * dt < 2)",
+            value,
+        )
+    return gains
+
+
+def _solver(slv: Table, duration: float | None) -> dict[str, Any]:
+    """The ``[solver]`` table; ``duration`` [s] (None: from ``cruise_speed``) bounds ``dt``."""
+    dt = slv.number("dt", 1e-3, minimum=0.0, strict=True, unit="[s]")
+    if duration is not None:
+        check_dt(slv, dt, duration)
+    solver = {
+        "law": slv.string("law", "transpose", ("transpose", "nonlinear", "pseudoinverse")),
+        "gain": _gain(slv, "gain", dt, 1000.0),
+        "dt": dt,
+        "damping": slv.number("damping", 0.0, minimum=0.0, bound=MAX_LENGTH),
+        "record_every": slv.number("record_every", 1, minimum=1, integer=True),
+        "settle": slv.number("settle", 0.0, minimum=0.0, unit="[s]"),
+        "engine": slv.string("engine", "compiled", ENGINES),
+    }
+    if duration is not None:
+        steps = (duration + solver["settle"]) / dt + 1
+        if steps > MAX_STEPS:
+            total = duration + solver["settle"]
+            raise slv.error(
+                "dt",
+                f"a step giving at most {MAX_STEPS:.0e} steps over trajectory.duration + "
+                f"solver.settle = {total:g} s (this one gives {steps:.3g})",
+                dt,
+            )
+    slv.done()
+    return solver
+
+
+def check_dt(slv: Table, dt: float, duration: float) -> None:
+    """Refuse a ``solver.dt`` that leaves fewer than ``MIN_SAMPLES`` samples in ``duration``."""
+    if duration > 0.0 and dt * MIN_SAMPLES > duration * (1.0 + 1e-12):
+        raise slv.error(
+            "dt",
+            f"a step of at most trajectory.duration / {MIN_SAMPLES} = "
+            f"{duration / MIN_SAMPLES:g} s (at least {MIN_SAMPLES} samples to track)",
+            dt,
+        )
+
+
+def _robot(rob: Table, folder: Path) -> dict[str, Any]:
+    """The ``[robot]`` table: ``source``, ``package_dirs``, ``lock``, ``xacro_args``."""
+    source = rob.string("source")
+    if "://" in source:
+        raise rob.error("source", "a robot name or a URDF path (URLs are not fetched)", source)
+    looks_like_path = source.endswith((".urdf", ".xacro")) or "/" in source or "\\" in source
+    robot = {
+        "source": _resolve(folder, source) if looks_like_path else source,
+        "package_dirs": [_resolve(folder, p) for p in _strings(rob, "package_dirs")],
+        "lock": rob.mapping("lock", lambda t, k: float(t.number(k, bound=MAX_JOINT_VALUE))),
+        "xacro_args": rob.mapping("xacro_args", lambda t, k: t.string(k)),
+    }
+    if robot["xacro_args"] and not is_xacro(source):
+        raise rob.error(
+            "xacro_args", "no xacro_args: robot.source is not a xacro file (name ending .xacro)"
+        )
+    rob.done()
+    return robot
+
+
+def _strings(table: Table, name: str) -> list[str]:
+    value = table.raw(name, [])
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise table.error(name, "a list of strings", value)
+    return value
+
+
+def _trajectory(tr: Table, folder: Path, has_orientation: bool = True) -> dict[str, Any]:
+    kind = tr.string("kind", choices=TRAJECTORY_KINDS)
+    scale = _angle_scale(tr)
+    out: dict[str, Any] = {"kind": kind}
+    out["start"] = tr.vector("start", 3, None, "[m]", MAX_LENGTH)
+    if kind in ("line", "hold"):
+        out["goal"] = tr.vector("goal", 3, None if kind == "hold" else ..., "[m]", MAX_LENGTH)
+        if out["goal"] is ...:
+            raise tr.error("goal", "a list of 3 numbers [m]")
+    if kind == "circle":
+        out["center"] = tr.vector("center", 3, unit="[m]", bound=MAX_LENGTH)
+        out["normal"] = tr.vector("normal", 3, [0.0, 0.0, 1.0], bound=SCALE_RANGE[1])
+        if np.linalg.norm(out["normal"]) == 0.0:
+            raise tr.error("normal", "a non-zero vector", out["normal"])
+        angle = tr.number("angle", None, bound=MAX_ANGLE / scale)
+        out["angle"] = 2.0 * math.pi if angle is None else angle * scale
+        if out["angle"] == 0.0:
+            raise tr.error("angle", "a non-zero angle", angle)
+    if kind == "waypoints":
+        out["points"] = tr.matrix("points", 3, unit="[m]", bound=MAX_LENGTH)
+        out["blend_radius"] = tr.number(
+            "blend_radius", 0.0, minimum=0.0, unit="[m]", bound=MAX_LENGTH
+        )
+    if kind == "hold":
+        out["duration"] = tr.number("duration", None, minimum=0.0, unit="[s]")
+    else:
+        out["duration"] = tr.number("duration", None, minimum=0.0, strict=True, unit="[s]")
+        if out["duration"] is not None and out["duration"] < MIN_DURATION:
+            raise tr.error("duration", f"a number >= {MIN_DURATION:g} [s]", out["duration"])
+        out["cruise_speed"] = tr.number(
+            "cruise_speed", None, minimum=0.0, strict=True, unit="[m/s]", bound=MAX_SPEED
+        )
+    if kind == "hold" and out["duration"] is None:
+        raise tr.error("duration", "a number >= 0 [s]")
+    if kind != "hold" and out["duration"] is None and out.get("cruise_speed") is None:
+        raise tr.error("duration", "a duration [s] or a cruise_speed")
+    rpy = tr.vector("goal_rpy", 3, None, bound=MAX_ANGLE / scale)
+    if rpy is not None and not has_orientation:
+        raise tr.error("goal_rpy", "no goal_rpy: the task has no orientation rows", rpy)
+    out["goal_rpy"] = None if rpy is None else [v * scale for v in rpy]
+    tr.done()
+    return out
+
+
+def _obstacle(ob: Table, folder: Path) -> dict[str, Any]:
+    shape = ob.string("shape", choices=SHAPES)
+    out: dict[str, Any] = {
+        "name": ob.string("name"),
+        "shape": shape,
+        "position": ob.vector("position", 3, unit="[m]", bound=MAX_LENGTH),
+    }
+    scale = _angle_scale(ob)
+    rpy = ob.vector("rpy", 3, [0.0, 0.0, 0.0], bound=MAX_ANGLE / scale)
+    out["rpy"] = [v * scale for v in rpy]
+    out["velocity"] = ob.vector("velocity", 3, [0.0, 0.0, 0.0], "[m/s]", MAX_SPEED)
+    out["threshold"] = _length(ob, "threshold", None, strict=True)
+    if shape == "sphere":
+        out["radius"] = _length(ob, "radius")
+    elif shape == "box":
+        size = ob.vector("size", 3, unit="[m]", bound=MAX_LENGTH)
+        if any(s <= 0 for s in size):
+            raise ob.error("size", "three positive side lengths [m]", size)
+        out["size"] = size
+    elif shape in ("capsule", "cylinder"):
+        out["radius"] = _length(ob, "radius", strict=shape == "cylinder")
+        out["length"] = _length(ob, "length", strict=shape == "cylinder")
+    else:
+        file = ob.string("file")
+        out["file"] = _resolve(Path(ob.file).parent, file)
+        out["scale"] = ob.vector("scale", 3, [1.0, 1.0, 1.0])
+        low, high = SCALE_RANGE
+        if any(not low <= abs(v) <= high for v in out["scale"]):
+            raise ob.error("scale", f"three scale factors of magnitude in [{low:g}, {high:g}]",
+                           out["scale"])  # fmt: skip
+    ob.done()
+    return out
+
+
+def _length(table: Table, name: str, default: Any = ..., strict: bool = False) -> Any:
+    """A length [m] in ``[0, MAX_LENGTH]`` (``> 0`` when ``strict``); ``...``: required."""
+    if default is ...:
+        return table.number(name, minimum=0.0, strict=strict, unit="[m]", bound=MAX_LENGTH)
+    return table.number(name, default, minimum=0.0, strict=strict, unit="[m]", bound=MAX_LENGTH)
+
+
+def _constraints(ct: Table, dt: float) -> dict[str, Any]:
+    """The ``[constraints]`` table; ``dt`` [s] bounds the rows' gains (``gain * dt``)."""
+    out: dict[str, Any] = {}
+    obs = ct.table("obstacles")
+    out["obstacles"] = {
+        "enabled": obs.boolean("enabled", False),
+        "threshold": _length(obs, "threshold", 0.03, strict=True),
+        "gain": _scalar_gain(obs, dt),
+        "form": obs.string("form", "normalized", ("normalized", "squared")),
+        "release": obs.string("release", None, ("projection", "sign")),
+        "links": _strings(obs, "links") or None,
+    }
+    obs.done()
+    jl = ct.table("joint_limits")
+    unit = jl.string("unit", "rad", UNITS)
+    scale = _angle_scale(jl)
+    written: dict[str, dict[str, float]] = {}
+    ov = jl.table("override")
+    for joint in list(ov.data):
+        sub = ov.table(joint)
+        lim = {k: sub.number(k, None, bound=MAX_JOINT_VALUE / scale) for k in ("lower", "upper")}
+        sub.done()
+        written[joint] = {k: float(v) for k, v in lim.items() if v is not None}
+    out["joint_limits"] = {
+        "enabled": jl.boolean("enabled", False),
+        "threshold": jl.number(
+            "threshold",
+            2.0 if scale != 1.0 else math.radians(2.0),
+            minimum=0.0,
+            strict=True,
+            unit=f"[{unit}] (revolute joints)",
+            bound=MAX_ANGLE / scale,
+        )
+        * scale,
+        "prismatic_threshold": float(
+            jl.number(
+                "prismatic_threshold",
+                PRISMATIC_THRESHOLD,
+                minimum=0.0,
+                strict=True,
+                unit="[m] (prismatic joints)",
+                bound=MAX_LENGTH,
+            )
+        ),
+        "gain": _scalar_gain(jl, dt),
+        "override": {j: {k: v * scale for k, v in lim.items()} for j, lim in written.items()},
+        "override_as_written": written,
+        "unit": unit,
+    }
+    jl.done()
+    sc = ct.table("self_collision")
+    out["self_collision"] = {
+        "enabled": sc.boolean("enabled", False),
+        "threshold": _length(sc, "threshold", 0.01, strict=True),
+        "gain": _scalar_gain(sc, dt),
+    }
+    sc.done()
+    out["dexterity"] = _dexterity(ct.table("dexterity"), dt)
+    out["kinds"] = {
+        kind.table: [kind.read_table(t, dt) for t in ct.tables(kind.table)]
+        for kind in TABLE_KINDS
+        if kind.table is not None
+    }
+    out["velocity_limits"] = _velocity_limits(ct.table("velocity_limits"))
+    out["release"] = ct.string("release", "projection", ("projection", "sign"))
+    out["hysteresis"] = ct.number("hysteresis", 0.0, minimum=0.0, bound=MAX_LENGTH)
+    out["max_active"] = ct.number("max_active", None, minimum=1, integer=True)
+    ct.done()
+    return out
+
+
+def _scalar_gain(table: Table, dt: float) -> Any:
+    """A constraint row's optional ``gain`` [1/s] (> 0, ``gain * dt <= MAX_GAIN_DT``)."""
+    value = table.raw("gain", None)
+    if isinstance(value, list):
+        raise table.error("gain", "a number > 0 [1/s]", value)
+    return _gain(table, "gain", dt)
+
+
+def _dexterity(dx: Table, dt: float) -> dict[str, Any]:
+    """``[constraints.dexterity]``: keep the task's manipulability ``w >= threshold`` (D1)-(D3).
+
+    Keys: ``enabled`` (default false), ``threshold`` (``w_min`` > 0 [m^p], required when
+    enabled), ``gain`` (> 0 [1/s], default: the law's).
+    """
+    enabled = dx.boolean("enabled", False)
+    unit = "[m^p] (the task's manipulability)"
+    if enabled:
+        threshold = dx.number("threshold", minimum=0.0, strict=True, unit=unit)
+    else:
+        threshold = dx.number("threshold", None, minimum=0.0, strict=True, unit=unit)
+    out = {
+        "enabled": enabled,
+        "threshold": None if threshold is None else float(threshold),
+        "gain": _scalar_gain(dx, dt),
+    }
+    dx.done()
+    return out
+
+
+def _velocity_limits(vl: Table) -> dict[str, Any]:
+    """``[constraints.velocity_limits]``: respect the URDF joint speed limits (time scaling).
+
+    Keys: ``enabled`` (default false), ``scale`` (fraction of the URDF velocity limit,
+    ``0 < scale <= 10``, default 1), ``acceleration`` (one limit for every joint or a
+    table joint -> limit [rad/s^2 or m/s^2]; default none), ``margin`` (in [0, 1],
+    default 0.05), ``max_passes`` (1..20, default 6), ``window`` ([s], default 0.05).
+    Checked whether enabled or not.
+    """
+    accel_unit = "[rad/s^2 or m/s^2]"
+    scale = vl.number("scale", 1.0, minimum=0.0, strict=True)
+    if scale > MAX_SCALE:
+        raise vl.error("scale", f"a number > 0 and <= {MAX_SCALE:g} (of the URDF limit)", scale)
+    acceleration = vl.raw("acceleration", None)
+    if isinstance(acceleration, dict):
+        acceleration = vl.mapping(
+            "acceleration",
+            lambda t, k: float(t.number(k, minimum=0.0, strict=True, unit=accel_unit)),
+        )
+    elif acceleration is not None:
+        acceleration = float(vl.number("acceleration", minimum=0.0, strict=True, unit=accel_unit))
+    margin = vl.number("margin", 0.05, minimum=0.0)
+    if margin > 1.0:
+        raise vl.error("margin", "a number in [0, 1]", margin)
+    passes = vl.number("max_passes", 6, minimum=1, integer=True)
+    if passes > MAX_PASSES:
+        raise vl.error("max_passes", f"an integer in 1..{MAX_PASSES}", passes)
+    out = {
+        "enabled": vl.boolean("enabled", False),
+        "scale": float(scale),
+        "acceleration": acceleration,
+        "margin": float(margin),
+        "max_passes": int(passes),
+        "window": float(vl.number("window", 0.05, minimum=0.0, strict=True, unit="[s]")),
+    }
+    vl.done()
+    return out

@@ -1,0 +1,52 @@
+"""What :func:`clik.solve` returns: :class:`SolveResult`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class SolveResult:
+    """Outcome of :func:`clik.solve`.
+
+    Attributes:
+        success: True when both tolerances were met (and, with constraints, the pose
+            was checked against every constraint: see :mod:`clik.solving.constrained_solve`).
+        reason: Why the solver stopped, in words; with constraints, a failure names
+            the constraint that blocks the target.
+        q: Final configuration (nq,).
+        iterations: Iterations over all attempts (with constraints, the samples of
+            the constrained law (10) included).
+        attempts: Number of attempts (1 + restarts used; with constraints, the
+            constrained starts included).
+        position_error: Final position error norm [m] (0 without position rows).
+        orientation_error: Final orientation error norm [rad] (0 without orientation rows).
+        wall_time_s: Wall time [s].
+        blocked_by: With constraints, the constraint that blocks a target reached
+            without them (e.g. ``"obstacle 'table'"``, ``"joint range of panda_joint4"``);
+            None when the target was solved, or is not reached even without constraints.
+    """
+
+    success: bool
+    reason: str
+    q: np.ndarray
+    iterations: int
+    attempts: int
+    position_error: float
+    orientation_error: float
+    wall_time_s: float
+    blocked_by: str | None = None
+
+    @property
+    def status(self) -> str:
+        """``"converged"``, ``"max_iterations"`` or ``"blocked"`` (met only without constraints)."""
+        if self.success:
+            return "converged"
+        return "blocked" if self.blocked_by is not None else "max_iterations"
+
+    @property
+    def blocked(self) -> bool:
+        """True when the target is reached without the constraints but not with them."""
+        return self.blocked_by is not None

@@ -1,0 +1,304 @@
+// Python entry point of a tracking run (used by clik/loop/compiled_run.py): Python
+// builds the robot, the reference chunks and the record arrays, and hands them over
+// as typed configs; the engine runs the samples and writes the record in place.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nanobind/eigen/dense.h>
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
+
+#include "bindings.hpp"
+#include "constraints/bind_constraints.hpp"
+#include "constraints/constraint_run.hpp"
+#include "loop/recording.hpp"
+#include "loop/tracking.hpp"
+#include "model/model_bridge.hpp"
+
+namespace nb = nanobind;
+
+namespace clik {
+
+namespace {
+
+template <typename T>
+using Array = nb::ndarray<T, nb::numpy, nb::c_contig, nb::device::cpu>;
+template <typename T>
+using In = nb::ndarray<const T, nb::c_contig, nb::device::cpu>;
+
+// The Recorder's arrays (clik/loop/recording.py), written in place: each must already have
+// its dtype and be contiguous (never converted: a converted copy would be written).
+struct RecordArrays {
+  long N = 0, every = 1;
+  Array<std::intptr_t> idx;
+  Array<double> q, qdot, qddot, position;
+  std::optional<Array<double>> reference;
+  Array<double> error;
+  std::optional<Array<double>> orientation_error;
+  std::optional<Array<std::int16_t>> active;
+  std::optional<Array<double>> distance;
+  Array<double> joint_min, joint_max, qdot_prev;
+
+  long capacity() const { return static_cast<long>(idx.shape(0)); }
+  long nq() const { return static_cast<long>(q.shape(1)); }
+  long nv() const { return static_cast<long>(qdot.shape(1)); }
+
+  // Throws std::invalid_argument unless every shape fits N, every, nq and nv.
+  void validate() const {
+    const long n = idx.ndim() == 1 ? capacity() : -1, every_ = std::max(every, 1L);
+    const long kept = N < 1 ? 0 : (N - 1) / every_ + 1 + ((N - 1) % every_ ? 1 : 0);
+    auto shaped = [](const auto& a, long rows, long cols) {
+      return (cols < 0 ? a.ndim() == 1 : a.ndim() == 2 && static_cast<long>(a.shape(1)) == cols) &&
+             static_cast<long>(a.shape(0)) == rows;
+    };
+    const bool ok =
+        N >= 1 && every >= 1 && n >= kept && q.ndim() == 2 &&
+        qdot.ndim() == 2 && shaped(q, n, nq()) && shaped(qdot, n, nv()) &&
+        shaped(qddot, n, nv()) && shaped(position, n, 3) && shaped(error, n, -1) &&
+        (!reference || shaped(*reference, n, 3)) &&
+        (!orientation_error || shaped(*orientation_error, n, -1)) &&
+        (!active || shaped(*active, n, -1)) && (!distance || shaped(*distance, n, -1)) &&
+        shaped(joint_min, nq(), -1) && shaped(joint_max, nq(), -1) && shaped(qdot_prev, nv(), -1);
+    if (!ok) {
+      throw std::invalid_argument(
+          "RecordArrays: idx (n,), q (n, nq), qdot and qddot (n, nv), position and reference "
+          "(n, 3), error, orientation_error, active and distance (n,), joint_min and joint_max "
+          "(nq,), qdot_prev (nv,), with n >= the samples kept of N every `every`");
+    }
+  }
+
+  RecordBuffers buffers() const {
+    RecordBuffers b;
+    b.N = N;
+    b.every = every;
+    b.capacity = capacity();
+    b.nq = static_cast<int>(nq());
+    b.nv = static_cast<int>(nv());
+    b.idx = idx.data();
+    b.q = q.data();
+    b.qdot = qdot.data();
+    b.qddot = qddot.data();
+    b.position = position.data();
+    b.reference = reference ? reference->data() : nullptr;
+    b.error = error.data();
+    b.orientation_error = orientation_error ? orientation_error->data() : nullptr;
+    b.active = active ? active->data() : nullptr;
+    b.distance = distance ? distance->data() : nullptr;
+    b.joint_min = joint_min.data();
+    b.joint_max = joint_max.data();
+    b.qdot_prev = qdot_prev.data();
+    return b;
+  }
+};
+
+const char* stop_name(Stop s) {
+  switch (s) {
+    case Stop::none: return "";
+    case Stop::non_finite: return "non_finite";
+    case Stop::joint_step: return "joint_step";
+    case Stop::unstable: return "unstable";
+    case Stop::deadlock: return "deadlock";
+    case Stop::stall: return "stall";
+  }
+  return "";
+}
+
+// A run and the Python objects whose memory it uses (kept alive with it).
+struct PyTrackingRun {
+  nb::object model;
+  In<double> times;
+  RecordArrays record;
+  std::unique_ptr<ConstraintRun> constraints;  // before run: it outlives the loop's use
+  std::unique_ptr<TrackingRun> run;
+};
+
+void make_run(PyTrackingRun* self, nb::object model, const TaskConfig& task,
+              const LawConfig& law, const StopConfig& stop, In<double> t,
+              const RecordArrays& record, JointMonitorConfig joints,
+              const std::optional<ConstraintSetConfig>& constraints) {
+  const pinocchio::Model& m = borrow_model(model.ptr());
+  if (t.ndim() != 1 || static_cast<long>(t.shape(0)) != record.N || record.nq() != m.nq ||
+      record.nv() != m.nv) {
+    throw std::invalid_argument("TrackingRun: t (N,) and the record's nq, nv are the model's");
+  }
+  const TimesView times(t.data(), static_cast<Eigen::Index>(t.shape(0)));
+  std::unique_ptr<ConstraintRun> crun;
+  if (constraints) {
+    const int m_rows = static_cast<int>(task.rows.size());
+    crun = std::make_unique<ConstraintRun>(*constraints, m, m_rows, law.settings.kind, law.alpha,
+                                           times, static_cast<int>(record.capacity()), task.frame,
+                                           task.rows);
+    if (m_rows + std::max(crun->limit(), 0) > law.rows) {
+      throw std::invalid_argument(
+          "LawConfig.rows: fewer than the task's and the constraints' rows");
+    }
+  }
+  auto run = std::make_unique<TrackingRun>(m, task, law, stop, times, record.buffers(),
+                                           std::move(joints), crun.get());
+  new (self) PyTrackingRun{std::move(model), t, record, std::move(crun), std::move(run)};
+}
+
+nb::tuple advance(PyTrackingRun& self, long c0, long c1, std::optional<In<double>> P_d,
+                  std::optional<In<double>> R_d, In<double> FF, In<bool> at_rest,
+                  Array<double> q) {
+  const auto n = static_cast<std::size_t>(c1 - c0);
+  const auto m = static_cast<std::size_t>(self.run->extended().m);
+  const bool ok = c0 >= 0 && c1 >= c0 && c1 <= static_cast<long>(self.record.N) &&
+                  FF.size() >= n * m && at_rest.size() >= n && (!P_d || P_d->size() >= 3 * n) &&
+                  (!R_d || R_d->size() >= 9 * n) &&
+                  static_cast<long>(q.size()) == static_cast<long>(self.record.nq());
+  if (!ok) {
+    throw std::invalid_argument(
+        "advance: samples c0 <= c1 <= N; FF (c1 - c0, m), at_rest (c1 - c0,), P_d (c1 - c0, 3) "
+        "and R_d (c1 - c0, 3, 3) or None, q (nq,)");
+  }
+  Advance a;
+  {
+    nb::gil_scoped_release release;
+    Eigen::Map<Vec> qv(q.data(), static_cast<Eigen::Index>(q.shape(0)));
+    a = self.run->advance(c0, c1, P_d ? P_d->data() : nullptr, R_d ? R_d->data() : nullptr,
+                          FF.data(), at_rest.data(), qv);
+  }
+  return nb::make_tuple(a.next, stop_name(a.stop), a.k, a.r, a.err);
+}
+
+void bind_configs(nb::module_& m) {
+  nb::class_<TaskConfig>(m, "TaskConfig", "The task: its frame and rows (clik.Task).")
+      .def(nb::init<int, std::vector<int>, bool, bool>(), nb::kw_only(), nb::arg("frame"),
+           nb::arg("rows"), nb::arg("has_position"), nb::arg("has_orientation"))
+      .def_ro("frame", &TaskConfig::frame)
+      .def_ro("rows", &TaskConfig::rows)
+      .def_ro("has_position", &TaskConfig::has_position)
+      .def_ro("has_orientation", &TaskConfig::has_orientation);
+  nb::class_<LawConfig>(m, "LawConfig", "The law, the task's gains and the extended task's room.")
+      .def(
+          "__init__",
+          [](LawConfig* self, const std::string& law, double damping, double dt, double beta_max,
+             const Vec& K_task, int rows, double alpha) {
+            if (!(dt > 0.0)) throw std::invalid_argument("LawConfig: dt > 0 [s]");
+            new (self) LawConfig{LawSettings{law_kind(law), damping, dt, beta_max}, K_task, rows,
+                                 alpha};
+          },
+          nb::kw_only(), nb::arg("law"), nb::arg("damping"), nb::arg("dt"), nb::arg("beta_max"),
+          nb::arg("K_task"), nb::arg("rows"), nb::arg("alpha"))
+      .def_prop_ro("dt", [](const LawConfig& c) { return c.settings.dt; })
+      .def_ro("K_task", &LawConfig::K_task)
+      .def_ro("rows", &LawConfig::rows)
+      .def_ro("alpha", &LawConfig::alpha);
+  nb::class_<StopConfig>(m, "StopConfig", "The stop checks' settings (clik.loop.stop_checks).")
+      .def(nb::init<double, double, double, double, double, double>(), nb::kw_only(),
+           nb::arg("deadlock_window"), nb::arg("deadlock_ratio"), nb::arg("deadlock_error"),
+           nb::arg("max_joint_step"), nb::arg("stall_window"), nb::arg("stall_progress"))
+      .def_ro("deadlock_window", &StopConfig::deadlock_window)
+      .def_ro("deadlock_ratio", &StopConfig::deadlock_ratio)
+      .def_ro("deadlock_error", &StopConfig::deadlock_error)
+      .def_ro("max_joint_step", &StopConfig::max_joint_step)
+      .def_ro("stall_window", &StopConfig::stall_window)
+      .def_ro("stall_progress", &StopConfig::stall_progress);
+  nb::class_<JointMonitorConfig>(m, "JointMonitorConfig",
+                                 "The joint limits a run must stay in (violations).")
+      .def(
+          "__init__",
+          [](JointMonitorConfig* self, std::vector<int> index, const Vec& lower, const Vec& upper,
+             std::vector<std::string> names) {
+            const auto n = static_cast<Eigen::Index>(index.size());
+            if (lower.size() != n || upper.size() != n ||
+                static_cast<Eigen::Index>(names.size()) != n) {
+              throw std::invalid_argument(
+                  "JointMonitorConfig: lower, upper and names need one entry per index");
+            }
+            new (self) JointMonitorConfig{std::move(index), lower, upper, std::move(names)};
+          },
+          nb::kw_only(), nb::arg("index"), nb::arg("lower"), nb::arg("upper"), nb::arg("names"))
+      .def_ro("index", &JointMonitorConfig::index)
+      .def_ro("lower", &JointMonitorConfig::lower)
+      .def_ro("upper", &JointMonitorConfig::upper)
+      .def_ro("names", &JointMonitorConfig::names);
+}
+
+void bind_record(nb::module_& m) {
+  nb::class_<RecordArrays>(m, "RecordArrays",
+                           "The Recorder's arrays (clik.loop.recording), written in place.")
+      .def(
+          "__init__",
+          [](RecordArrays* self, long N, long every, Array<std::intptr_t> idx, Array<double> q,
+             Array<double> qdot, Array<double> qddot, Array<double> position,
+             std::optional<Array<double>> reference, Array<double> error,
+             std::optional<Array<double>> orientation_error,
+             std::optional<Array<std::int16_t>> active, std::optional<Array<double>> distance,
+             Array<double> joint_min, Array<double> joint_max, Array<double> qdot_prev) {
+            RecordArrays r{N,         every,  idx,      q,         qdot,      qddot,
+                           position,  reference, error, orientation_error, active, distance,
+                           joint_min, joint_max, qdot_prev};
+            r.validate();
+            new (self) RecordArrays(std::move(r));
+          },
+          nb::kw_only(), nb::arg("N"), nb::arg("every"), nb::arg("idx").noconvert(),
+          nb::arg("q").noconvert(), nb::arg("qdot").noconvert(), nb::arg("qddot").noconvert(),
+          nb::arg("position").noconvert(), nb::arg("reference").noconvert().none(),
+          nb::arg("error").noconvert(), nb::arg("orientation_error").noconvert().none(),
+          nb::arg("active").noconvert().none(), nb::arg("distance").noconvert().none(),
+          nb::arg("joint_min").noconvert(), nb::arg("joint_max").noconvert(),
+          nb::arg("qdot_prev").noconvert(),
+          "Each array as the Recorder allocated it (its dtype, contiguous: never converted), "
+          "reference, orientation_error, active and distance None where it has none.")
+      .def_ro("N", &RecordArrays::N)
+      .def_ro("every", &RecordArrays::every)
+      .def_prop_ro("capacity", &RecordArrays::capacity);
+}
+
+}  // namespace
+
+void bind_tracking(nb::module_& m) {
+  m.attr("BLOCKED_FRACTION") = BLOCKED_FRACTION;
+  m.attr("STABILITY_EVERY") = STABILITY_EVERY;
+  m.attr("JOINT_TOLERANCE") = JOINT_TOLERANCE;
+  bind_configs(m);
+  bind_record(m);
+  nb::class_<PyTrackingRun>(m, "TrackingRun")
+      .def("__init__", &make_run, nb::kw_only(), nb::arg("model"), nb::arg("task"),
+           nb::arg("law"), nb::arg("stop"), nb::arg("t").noconvert(), nb::arg("record"),
+           nb::arg("joints"), nb::arg("constraints").none(),
+           "model: the robot's pin.Model (borrowed); t: the time grid (N,) float64, read in "
+           "place; record: the Recorder's arrays; constraints: a ConstraintSetConfig or None.")
+      .def("advance", &advance, nb::arg("c0"), nb::arg("c1"), nb::arg("P_d").noconvert().none(),
+           nb::arg("R_d").noconvert().none(), nb::arg("FF").noconvert(),
+           nb::arg("at_rest").noconvert(), nb::arg("q").noconvert(),
+           "Run samples [c0, c1): (next, stop, k, r, err); q is updated in place.")
+      .def_prop_ro("max_error", [](const PyTrackingRun& s) { return s.run->max_error(); })
+      .def_prop_ro("last_error", [](const PyTrackingRun& s) { return s.run->last_error(); })
+      .def_prop_ro("steps", [](const PyTrackingRun& s) { return s.run->steps(); })
+      .def_prop_ro("kept", [](const PyTrackingRun& s) { return s.run->kept(); })
+      .def_prop_ro("qdot", [](const PyTrackingRun& s) { return Vec(s.run->qdot()); })
+      .def_prop_ro("jump", [](const PyTrackingRun& s) { return s.run->checks().jump; })
+      .def_prop_ro("margin", [](const PyTrackingRun& s) { return s.run->checks().margin; })
+      .def_prop_ro("worst_margin",
+                   [](const PyTrackingRun& s) { return s.run->checks().worst_margin; })
+      .def_prop_ro("ext_J", [](const PyTrackingRun& s) { return Mat(s.run->extended().J); })
+      .def_prop_ro("ext_e", [](const PyTrackingRun& s) { return Vec(s.run->extended().e); })
+      .def_prop_ro("ext_K", [](const PyTrackingRun& s) { return Vec(s.run->extended().K); })
+      .def_prop_ro("ext_ff", [](const PyTrackingRun& s) { return Vec(s.run->extended().ff); })
+      .def("constraint_records",
+           [](const PyTrackingRun& s) {
+             if (!s.constraints) throw std::invalid_argument("the run has no constraints");
+             return constraint_records(*s.constraints, static_cast<int>(s.run->kept()));
+           },
+           "What the run's constraints recorded (see constraints/bind_constraints.hpp).")
+      .def_prop_ro("violations", [](const PyTrackingRun& s) {
+        nb::list out;
+        for (const auto& v : s.run->monitor().records()) {
+          out.append(nb::make_tuple(v.constraint, v.kind, v.t_first, v.t_last, v.worst));
+        }
+        return out;
+      });
+}
+
+}  // namespace clik

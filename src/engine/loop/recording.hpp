@@ -1,0 +1,89 @@
+// The record of a run, written in place into the arrays of the Python
+// Recorder (clik/loop/recording.py, which allocates them and trims them after the
+// run): every record_every-th sample and the last; running joint extremes.
+#pragma once
+
+#include <cstdint>
+
+#include "types.hpp"
+
+namespace clik {
+
+using RowMap = Eigen::Map<Mat>;
+using VecMap = Eigen::Map<Vec>;
+
+// Views of the Recorder's arrays; a null pointer where the Recorder has none.
+struct RecordBuffers {
+  long N = 0;      // samples in the run
+  long every = 1;  // record_every
+  long capacity = 0;
+  int nq = 0, nv = 0;
+  std::intptr_t* idx = nullptr;      // (capacity)
+  double* q = nullptr;               // (capacity, nq)
+  double* qdot = nullptr;            // (capacity, nv)
+  double* qddot = nullptr;           // (capacity, nv)
+  double* position = nullptr;        // (capacity, 3)
+  double* reference = nullptr;       // (capacity, 3) or null
+  double* error = nullptr;           // (capacity)
+  double* orientation_error = nullptr;  // (capacity) or null
+  std::int16_t* active = nullptr;    // (capacity) or null
+  double* distance = nullptr;        // (capacity) or null
+  double* joint_min = nullptr;       // (nq)
+  double* joint_max = nullptr;       // (nq)
+  double* qdot_prev = nullptr;       // (nv)
+};
+
+class Recorder {
+ public:
+  explicit Recorder(const RecordBuffers& b) : b_(b) {}
+
+  bool due(long k) const { return k % b_.every == 0 || k == b_.N - 1; }
+
+  void start(const Vec& q) {
+    VecMap(b_.joint_min, b_.nq) = q;
+    VecMap(b_.joint_max, b_.nq) = q;
+  }
+
+  // Store sample k; returns its slot.
+  long keep(long k, const Vec& q, const Vec& qdot, const Vec3& position, const double* reference,
+            double error, double orientation_error) {
+    const long j = j_;
+    b_.idx[j] = k;
+    VecMap(b_.q + j * b_.nq, b_.nq) = q;
+    VecMap(b_.qdot + j * b_.nv, b_.nv) = qdot;
+    Eigen::Map<Vec3>(b_.position + 3 * j) = position;
+    b_.error[j] = error;
+    if (b_.reference != nullptr && reference != nullptr) {
+      Eigen::Map<Vec3>(b_.reference + 3 * j) = Eigen::Map<const Vec3>(reference);
+    }
+    if (b_.orientation_error != nullptr) b_.orientation_error[j] = orientation_error;
+    if (b_.every > 1) {
+      VecMap(b_.qddot + j * b_.nv, b_.nv) = qdot - VecMap(b_.qdot_prev, b_.nv);
+    }
+    j_ = j + 1;
+    return j;
+  }
+
+  void constraints(long j, int active, double min_distance) {
+    if (b_.active != nullptr) b_.active[j] = static_cast<std::int16_t>(active);
+    if (b_.distance != nullptr) b_.distance[j] = min_distance;
+  }
+
+  // Running extremes and the previous qdot (decimated runs only).
+  void every_sample(const Vec& q, const Vec& qdot) {
+    if (b_.every > 1) {
+      VecMap lo(b_.joint_min, b_.nq), hi(b_.joint_max, b_.nq);
+      lo = lo.cwiseMin(q);
+      hi = hi.cwiseMax(q);
+      VecMap(b_.qdot_prev, b_.nv) = qdot;
+    }
+  }
+
+  long kept() const { return j_; }
+
+ private:
+  RecordBuffers b_;
+  long j_ = 0;
+};
+
+}  // namespace clik

@@ -1,0 +1,170 @@
+// The tracking loop: see loop/tracking.hpp and clik/loop/tracking.py (the specification).
+#include "loop/tracking.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <pinocchio/algorithm/frames.hpp>
+#include <pinocchio/algorithm/jacobian.hpp>
+#include <pinocchio/algorithm/joint-configuration.hpp>
+#include <pinocchio/algorithm/kinematics.hpp>
+#include <pinocchio/spatial/explog.hpp>
+
+#include "loop/constraint_hooks.hpp"
+
+namespace clik {
+
+namespace {
+constexpr auto LWA = pinocchio::LOCAL_WORLD_ALIGNED;
+}
+
+const TaskConfig& TrackingRun::checked(const pinocchio::Model& model, const TaskConfig& task,
+                                       const LawConfig& law, const JointMonitorConfig& joints) {
+  const auto m = static_cast<int>(task.rows.size());
+  bool ok = task.frame >= 0 && task.frame < static_cast<int>(model.nframes) && m >= 1 &&
+            m <= MAX_TASK_ROWS && law.K_task.size() == m && law.rows >= m;
+  for (int row : task.rows) ok = ok && row >= 0 && row < 6;
+  if (!ok) {
+    throw std::invalid_argument(
+        "TrackingRun: the task's frame in the model, 1 to 6 rows among 0..5, one gain per row "
+        "and room for them (LawConfig.rows >= m)");
+  }
+  for (int i : joints.index) {
+    if (i < 0 || i >= model.nq) {
+      throw std::invalid_argument("JointMonitorConfig: an index outside the robot's model");
+    }
+  }
+  return task;
+}
+
+TrackingRun::TrackingRun(const pinocchio::Model& model, const TaskConfig& task,
+                         const LawConfig& law, const StopConfig& stop, const TimesView& t,
+                         const RecordBuffers& record, JointMonitorConfig joints,
+                         ConstraintRun* constraints)
+    : model_(model), data_(model), task_(checked(model, task, law, joints)),
+      m_(static_cast<int>(task.rows.size())), dt_(law.settings.dt), t_(t),
+      ext_(m_, law.rows, model.nv, law.K_task), law_(law.settings, law.rows, model.nv),
+      checks_(stop, law.settings.kind, law.settings.dt, law.rows), rec_(record),
+      monitor_(std::move(joints)),
+      crun_(constraints), J6_(6, model.nv), e6_(Eigen::Matrix<double, 6, 1>::Zero()),
+      qdot_(Vec::Zero(model.nv)), dq_(Vec::Zero(model.nv)), qnext_(Vec::Zero(model.nq)) {
+  J6_.setZero();
+  for (int row : task.rows) (row < 3 ? pos_rows_ : rot_rows_).push_back(row);
+}
+
+// 1. The frame's placement and Jacobian (6, nv) at q, eq. (3), LOCAL_WORLD_ALIGNED.
+// With constraints every joint's Jacobian is computed: their rows need them.
+void TrackingRun::kinematics(const Vec& q) {
+  if (crun_ == nullptr) {
+    pinocchio::computeFrameJacobian(model_, data_, q, task_.frame, LWA, J6_);
+    pinocchio::updateFramePlacement(model_, data_, task_.frame);
+    return;
+  }
+  pinocchio::computeJointJacobians(model_, data_, q);
+  pinocchio::updateFramePlacement(model_, data_, task_.frame);
+  J6_.setZero();
+  pinocchio::getFrameJacobian(model_, data_, task_.frame, LWA, J6_);
+}
+
+// 2. Task error (6) e = (p_d - p, log3(R_d R^T)) and rows of J into the task rows.
+void TrackingRun::task_rows(const double* p_d, const double* R_d, const double* xdot_d) {
+  const pinocchio::SE3& placement = data_.oMf[task_.frame];
+  if (p_d != nullptr && task_.has_position) {
+    e6_.head<3>() = Eigen::Map<const Vec3>(p_d) - placement.translation();
+  }
+  if (R_d != nullptr && task_.has_orientation) {
+    const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> Rd(R_d);
+    const Mat3 R = Rd * placement.rotation().transpose();
+    e6_.tail<3>() = pinocchio::log3(R);
+  }
+  for (int i = 0; i < m_; ++i) {
+    const int row = task_.rows[i];
+    ext_.e[i] = e6_[row];
+    ext_.J.row(i) = J6_.row(row);
+    ext_.ff[i] = xdot_d[i];
+  }
+}
+
+// Norms of the task's own position rows [m] and orientation rows [rad]; the
+// first is the run's task error (the orientation rows' for an orientation task).
+void TrackingRun::error_norms(double& pos, double& rot) const {
+  double r2 = 0.0, p2 = 0.0;
+  for (int row : rot_rows_) r2 += e6_[row] * e6_[row];
+  rot = std::sqrt(r2);
+  if (pos_rows_.empty()) {
+    pos = rot;
+    return;
+  }
+  for (int row : pos_rows_) p2 += e6_[row] * e6_[row];
+  pos = std::sqrt(p2);
+}
+
+// 5. Why the run must stop at sample k, if it must.
+Stop TrackingRun::stop(long k, double err, int r, double blocked, bool at_rest) {
+  Stop why = checks_.divergence(qdot_, err);
+  if (why == Stop::none) why = checks_.instability(static_cast<int>(k), ext_, r, err);
+  if (why != Stop::none) return why;
+  if (checks_.deadlock(ext_, r, err, blocked)) return Stop::deadlock;
+  if (checks_.stall(static_cast<int>(k), err, at_rest)) return Stop::stall;
+  return Stop::none;
+}
+
+// Every limit crossed at this sample: joints, obstacle surfaces, link pairs.
+void TrackingRun::observe_limits(double tk, const Vec& q) {
+  monitor_.observe_joints(tk, q);
+  if (crun_ != nullptr) observe_constraint_limits(*crun_, tk, monitor_);
+}
+
+Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* R_d,
+                             const double* FF, const bool* at_rest, Eigen::Ref<Vec> q) {
+  const long N = t_.size();
+  Vec qv = q;  // the state as a Vec (one copy per chunk)
+  if (!started_) {
+    rec_.start(qv);
+    started_ = true;
+  }
+  Advance out;
+  for (long k = c0; k < c1; ++k) {
+    const long kk = k - c0;
+    const double* p_d = P_d == nullptr ? nullptr : P_d + 3 * kk;
+    kinematics(qv);
+    task_rows(p_d, R_d == nullptr ? nullptr : R_d + 9 * kk, FF + m_ * kk);
+    const bool exact = rec_.due(k);
+    const int r = crun_ == nullptr
+                      ? m_
+                      : m_ + update_constraints(*crun_, k, qv, model_, data_, ext_, law_, exact);
+    const double blocked = law_.velocity(ext_, r, qdot_);
+    double err = 0.0, err_rot = 0.0;
+    error_norms(err, err_rot);
+    err_ = err;
+    max_err_ = std::max(max_err_, err);
+    const Stop why = stop(k, err, r, blocked, at_rest[kk]);
+    observe_limits(t_[k], qv);
+    if (exact || why != Stop::none) {
+      const long j = rec_.keep(k, qv, qdot_, data_.oMf[task_.frame].translation(), p_d, err,
+                               err_rot);
+      if (crun_ != nullptr) record_constraints(*crun_, rec_, j, r - m_);
+    }
+    rec_.every_sample(qv, qdot_);
+    steps_ = k + 1;
+    if (why != Stop::none) {
+      out.next = k + 1;
+      out.stop = why;
+      out.k = k;
+      out.r = r;
+      out.err = err;
+      q = qv;
+      return out;
+    }
+    if (k + 1 < N) {
+      dq_ = qdot_ * dt_;
+      pinocchio::integrate(model_, qv, dq_, qnext_);
+      qv.swap(qnext_);
+    }
+  }
+  out.next = c1;
+  q = qv;
+  return out;
+}
+
+}  // namespace clik

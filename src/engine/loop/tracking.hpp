@@ -1,0 +1,110 @@
+// One tracking run in the engine: the per-sample loop of clik/loop/tracking.py
+// (_Run.execute), whose Python form is the specification. Per sample:
+//   1. kinematics: the frame's placement and Jacobian at q_k, eq. (3);
+//   2. task error e = x_d - x, eq. (6), on the task's rows;
+//   3. constraint rows (13)-(19) into the extended task (24)-(25);
+//   4. the law, (9), (8) or (10);
+//   5. stop checks and limits crossed;
+//   6. recording, then q_{k+1} = q_k (+) qdot_k dt.
+// Python samples the reference in chunks and calls advance() per chunk;
+// nothing is allocated per sample.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include <pinocchio/multibody/data.hpp>
+#include <pinocchio/multibody/model.hpp>
+
+#include "loop/laws.hpp"
+#include "loop/recording.hpp"
+#include "loop/stop_checks.hpp"
+#include "constraints/violations.hpp"
+#include "tasks/extended_task.hpp"
+#include "types.hpp"
+
+namespace clik {
+
+class ConstraintRun;  // constraints/constraint_run.hpp
+
+// The task: a frame, its kept rows of (x, y, z, rx, ry, rz), what it has
+// (`_engine.TaskConfig`).
+struct TaskConfig {
+  int frame = 0;
+  std::vector<int> rows;
+  bool has_position = true;
+  bool has_orientation = false;
+};
+
+// The law and the task's gains (`_engine.LawConfig`).
+struct LawConfig {
+  LawSettings settings;
+  Vec K_task;       // the task rows' gains [1/s] (m)
+  int rows = 0;     // room of the extended task: the task's rows and the most constraint rows
+  double alpha = 0; // the task's largest gain [1/s] (the constraint rows' default gains)
+};
+
+using StopConfig = StopSettings;  // `_engine.StopConfig`
+
+// Where a run is after advance().
+struct Advance {
+  long next = 0;        // the next sample to run (== c1 when the chunk is done)
+  Stop stop = Stop::none;
+  long k = -1;          // the sample it stopped at
+  int r = 0;            // rows of the extended task then
+  double err = 0.0;     // task error then
+};
+
+class TrackingRun {
+ public:
+  // Throws std::invalid_argument when the task, the gains, the rows or the joints do not
+  // fit the model.
+  TrackingRun(const pinocchio::Model& model, const TaskConfig& task, const LawConfig& law,
+              const StopConfig& stop, const TimesView& t, const RecordBuffers& record,
+              JointMonitorConfig joints, ConstraintRun* constraints);
+
+  // Runs samples [c0, c1) with the chunk's reference: P_d (n, 3) or null, R_d
+  // (n, 3, 3) row-major or null, FF (n, m), at_rest (n). q is the state, updated.
+  Advance advance(long c0, long c1, const double* P_d, const double* R_d, const double* FF,
+                  const bool* at_rest, Eigen::Ref<Vec> q);
+
+  double max_error() const { return max_err_; }
+  double last_error() const { return err_; }
+  long steps() const { return steps_; }
+  long kept() const { return rec_.kept(); }
+  const ExtendedTask& extended() const { return ext_; }
+  const Vec& qdot() const { return qdot_; }
+  const StopChecks& checks() const { return checks_; }
+  const ViolationMonitor& monitor() const { return monitor_; }
+
+ private:
+  void kinematics(const Vec& q);
+  void task_rows(const double* p_d, const double* R_d, const double* xdot_d);
+  void error_norms(double& pos, double& rot) const;
+  Stop stop(long k, double err, int r, double blocked, bool at_rest);
+  void observe_limits(double tk, const Vec& q);
+  static const TaskConfig& checked(const pinocchio::Model& model, const TaskConfig& task,
+                                   const LawConfig& law, const JointMonitorConfig& joints);
+
+  const pinocchio::Model& model_;
+  pinocchio::Data data_;
+  TaskConfig task_;
+  int m_;
+  double dt_;
+  TimesView t_;
+  ExtendedTask ext_;
+  Law law_;
+  StopChecks checks_;
+  Recorder rec_;
+  ViolationMonitor monitor_;
+  ConstraintRun* crun_;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J6_;
+  Eigen::Matrix<double, 6, 1> e6_;
+  Vec qdot_, dq_, qnext_;
+  std::vector<int> pos_rows_, rot_rows_;
+  double max_err_ = 0.0, err_ = 0.0;
+  long steps_ = 0;
+  bool started_ = false;
+};
+
+}  // namespace clik

@@ -1,0 +1,1 @@
+"""clik's tests, one folder per room of ``clik/``; helpers and ``data/`` at this level."""

@@ -1,0 +1,1 @@
+"""Tests of :mod:`clik.loop` (and the compiled loop, ``src/engine/loop``)."""

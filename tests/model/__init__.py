@@ -1,0 +1,1 @@
+"""Tests of :mod:`clik.model`: robots loaded from their files, joint kinds."""

@@ -1,0 +1,1 @@
+"""Whole-package hardening: bad input, hostile files and sizes, the robot zoo."""

@@ -1,0 +1,1 @@
+"""Tests of :mod:`clik.sweep` (sweeps and reachability maps)."""

@@ -1,0 +1,1 @@
+"""Tests of :mod:`clik.viz` (with and without a browser)."""
