@@ -96,3 +96,35 @@ def test_rooms_import_one_way():
             room(d) for d in deps if d != "clik" and room(d) != room(name)
         )
     assert cycles(rooms) == []
+
+
+CXX_CONSTANT = re.compile(
+    r"\bconstexpr\s+(?:double|float|int|long|std::size_t|std::int\w+)\s+([A-Z][A-Z0-9_]+)\s*="
+)
+"""``constexpr double NAME = ...`` in the engine: a number (an alias of an enum is not)."""
+PY_CONSTANT = re.compile(r"^([A-Z][A-Z0-9_]+)(?:\s*:\s*[^=]+)?\s*=", re.M)
+"""A module-level ``NAME = ...`` in ``clik/``."""
+
+
+def test_constant_pattern():
+    assert CXX_CONSTANT.findall("constexpr double STEP_BUDGET = 0.02;") == ["STEP_BUDGET"]
+    assert CXX_CONSTANT.findall("  constexpr int MAX_TASK_ROWS = 6;") == ["MAX_TASK_ROWS"]
+    assert CXX_CONSTANT.findall("constexpr auto LWA = pinocchio::LOCAL_WORLD_ALIGNED;") == []
+    assert PY_CONSTANT.findall("STEP_BUDGET = 0.02\nx = 1\nMAX: int = 3\n") == [
+        "STEP_BUDGET",
+        "MAX",
+    ]
+
+
+def test_every_constant_both_engines_declare_is_checked_to_agree():
+    """A number declared in both languages is a row of the agreement test
+    (tests/loop/test_engine_constants.py), which compares the engine's to Python's."""
+    from tests.loop.test_engine_constants import SHARED
+
+    cxx = {n for p in CXX_SOURCES for n in CXX_CONSTANT.findall(p.read_text(encoding="utf-8"))}
+    python = {
+        n for p in MODULES.values() for n in PY_CONSTANT.findall(p.read_text(encoding="utf-8"))
+    }
+    checked = {attribute for _, attribute in SHARED.values()}
+    assert sorted((cxx & python) - checked) == []
+    assert cxx & python  # the scan finds the shared ones (STEP_BUDGET, ...)

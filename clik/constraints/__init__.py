@@ -15,6 +15,8 @@ and one C++ type; the core (:class:`ConstraintRun`) never names a kind:
 - :class:`LinkPairs`: link-link rows (self-collision).
 - :class:`Dexterity`: the dexterity row, ``w(q) >= w_min`` on the task's
   manipulability (D1)-(D3) (clik's addition; the paper's future work).
+- :class:`Workspace`: a frame's origin kept inside a box, (W1)-(W2).
+- :class:`Cone`: a frame axis kept within an angle of a direction, (C1)-(C3).
 - :func:`obstacle_row`: obstacle rows, eqs. (13)-(15), in the paper's squared form
   or the normalised one.
 - :class:`CollisionScene`: link geometry (convex) and obstacles, with pruning.
@@ -26,6 +28,7 @@ from clik.constraints.collision_scene import (
     NoCollisionGeometryWarning,
     SkippedGeometryWarning,
 )
+from clik.constraints.cone import Cone
 from clik.constraints.constraint_run import ConstraintRun
 from clik.constraints.constraint_set import RELEASE_RULES, ConstraintSet
 from clik.constraints.dexterity import Dexterity
@@ -35,6 +38,7 @@ from clik.constraints.link_pairs import LinkPairs
 from clik.constraints.obstacle import SHAPES, Obstacle
 from clik.constraints.obstacle_avoidance import ObstacleAvoidance
 from clik.constraints.obstacle_rows import FORMS, obstacle_row, point_jacobian
+from clik.constraints.workspace import Workspace
 
 __all__ = [
     "FORMS",
@@ -42,6 +46,7 @@ __all__ = [
     "SHAPES",
     "Candidate",
     "CollisionScene",
+    "Cone",
     "ConstraintKind",
     "ConstraintRun",
     "ConstraintSet",
@@ -53,6 +58,7 @@ __all__ = [
     "Obstacle",
     "ObstacleAvoidance",
     "SkippedGeometryWarning",
+    "Workspace",
     "obstacle_row",
     "point_jacobian",
 ]

@@ -47,6 +47,9 @@ if TYPE_CHECKING:
     from clik.model.robot import Robot
     from clik.outputs.result import TrackingResult
 
+PARALLEL_SINE = 1e-12
+"""Below this ``|a x u|`` the axis is along the direction (or against it): ``n`` of (C3)
+is then taken normal to ``a`` and the world axis least along it."""
 DEFAULT_THRESHOLD = math.radians(5.0)
 """Default ``d_c`` [rad]."""
 
@@ -67,7 +70,7 @@ def angle_and_normal(a: np.ndarray, u: np.ndarray) -> tuple[float, np.ndarray]:
     cross = np.cross(a, u)
     s = float(np.linalg.norm(cross))
     theta = math.atan2(s, float(a @ u))
-    if s > 1e-12:
+    if s > PARALLEL_SINE:
         return theta, cross / s
     basis = np.eye(3)[int(np.argmin(np.abs(a)))]  # a = +-u: any normal is a gradient
     n = np.cross(a, basis)
@@ -150,10 +153,15 @@ class Cone(ConstraintKind):
             "threshold": table.number(
                 "threshold", default, minimum=0.0, strict=True, unit=f"[{unit}]",
                 bound=math.pi / scale,
-            ) * scale,
+            ) * scale,  # below the angle: checked in the table's unit below
             "name": table.string("name", None),
             "gain": read_gain(table, dt),
         }  # fmt: skip
+        if out["threshold"] >= out["angle"]:
+            raise table.error(
+                "threshold", f"an angle > 0 and below angle = {out['angle'] / scale:g} [{unit}]",
+                out["threshold"] / scale,
+            )  # fmt: skip
         table.done()
         return out
 

@@ -25,6 +25,12 @@ import pinocchio as pin
 
 FORMS = ("normalized", "squared")
 
+CONTACT_DISTANCE = 1e-9
+"""At or below this distance [m] (or witness points this close) the row's direction is
+coal's contact normal, not the witness points' difference."""
+MIN_WITNESS_GAP = 1e-12
+"""Witness points closer than this [m] give no direction of their own."""
+
 
 def point_jacobian(model: pin.Model, data: pin.Data, joint: int, point: np.ndarray) -> np.ndarray:
     """Linear Jacobian (3, nv) of a point fixed on joint ``joint``'s body, world-aligned.
@@ -65,7 +71,7 @@ def obstacle_row(
     """
     d = p_link - p_obstacle
     norm = math.sqrt(d.dot(d))
-    if distance > 1e-9 and norm > 1e-12:
+    if distance > CONTACT_DISTANCE and norm > MIN_WITNESS_GAP:
         n = d / norm
     else:  # contact or penetration: push out along the contact normal
         n = -np.asarray(normal, dtype=float)

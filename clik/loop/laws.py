@@ -140,6 +140,9 @@ except (ImportError, AttributeError, TypeError):  # pragma: no cover - other num
 CONDITION_RATIO = 0.01
 """Damping starts when a singular value falls below this fraction of ``sigma_max(J)``."""
 
+RANK_TOLERANCE = 1e-9
+"""A constraint direction counts (its singular value, relative to ``max(scale, 1)``) above this:
+a duplicated row adds no direction to the null-space projection."""
 STEP_BUDGET = 0.02
 """Largest joint step [rad or m] each level of law (10) may ask for in one sample; a larger
 one is scaled down whole (its direction kept), see :func:`prioritized`."""
@@ -244,7 +247,7 @@ def prioritized(
         U, sv, Vt = np.linalg.svd(C, full_matrices=False)
         gain = sv / (np.maximum(sv * sv, epsilon * epsilon) + damping * damping)
         qdot_c = _within_budget(Vt.T.dot(gain * U.T.dot(b_constraint)), dt)
-        rows = Vt[sv > 1e-9 * max(scale, 1.0)]  # a duplicated row adds no direction
+        rows = Vt[sv > RANK_TOLERANCE * max(scale, 1.0)]  # a duplicated row adds no direction
         JN = J - J.dot(rows.T).dot(rows)
         rest = b_task - J.dot(qdot_c)
         qdot_t = _within_budget(JN.T.dot(damped_solve(JN.dot(JN.T), rest, epsilon, damping)), dt)

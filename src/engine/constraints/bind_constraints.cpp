@@ -207,6 +207,9 @@ nb::dict constraint_records(const ConstraintRun& run, int n_rec) {
 void bind_constraints(nb::module_& m) {
   m.attr("AT_THRESHOLD") = AT_THRESHOLD;
   m.attr("GJK_TOLERANCE") = GJK_TOLERANCE;
+  m.attr("CONTACT_DISTANCE") = CONTACT_DISTANCE;
+  m.attr("MIN_WITNESS_GAP") = MIN_WITNESS_GAP;
+  m.attr("PARALLEL_SINE") = PARALLEL_SINE;
   m.attr("SINGULAR_DAMPING") = SINGULAR_DAMPING;
   bind_scene(m);
   for_each_kind_config([&](auto* kind) { std::remove_pointer_t<decltype(kind)>::bind(m); });

@@ -16,7 +16,7 @@ double cone_angle(const Vec3& a, const Vec3& u, Vec3& n) {
   const Vec3 cross = a.cross(u);
   const double s = cross.norm();
   const double theta = std::atan2(s, a.dot(u));
-  if (s > 1e-12) {
+  if (s > PARALLEL_SINE) {
     n = cross / s;
   } else {  // a = +-u: any normal is a gradient
     Eigen::Index least = 0;

@@ -20,6 +20,10 @@ namespace clik {
 
 class Cone;
 
+// Below this |a x u| the axis is along (or against) the direction: n is then normal to a
+// and the world axis least along it.
+constexpr double PARALLEL_SINE = 1e-12;
+
 struct ConeConfig {
   using Run = Cone;
   int frame = -1;                    // the frame carrying the axis

@@ -14,7 +14,7 @@ RowTerms obstacle_row(ObstacleForm form, double threshold, double distance, cons
   const Vec3 d = p_link - p_obstacle;
   const double norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
   Vec3 n;
-  if (distance > 1e-9 && norm > 1e-12) {
+  if (distance > CONTACT_DISTANCE && norm > MIN_WITNESS_GAP) {
     n = d / norm;
   } else {  // contact or penetration: push out along the contact normal
     n = -normal;

@@ -17,6 +17,11 @@
 
 namespace clik {
 
+// At or below this distance [m] the row's direction is coal's contact normal; witness
+// points closer than MIN_WITNESS_GAP [m] give no direction of their own.
+constexpr double CONTACT_DISTANCE = 1e-9;
+constexpr double MIN_WITNESS_GAP = 1e-12;
+
 enum class ObstacleForm { normalized, squared };
 
 struct ErrorScale {

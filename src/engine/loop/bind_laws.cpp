@@ -13,6 +13,7 @@ namespace clik {
 void bind_laws(nb::module_& m) {
   m.attr("CONDITION_RATIO") = CONDITION_RATIO;
   m.attr("STEP_BUDGET") = STEP_BUDGET;
+  m.attr("RANK_TOLERANCE") = RANK_TOLERANCE;
   m.def(
       "law_velocity",
       [](const std::string& law, const Mat& J, const Vec& e, const Vec& K, const Vec& ff, int m_rows,

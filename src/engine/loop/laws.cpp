@@ -150,7 +150,7 @@ void Law::constraint_level(const ExtendedTask& ext, int v, double epsilon) {
   qdot_c_.noalias() = Vm * tmp_.head(k);
   within_budget(qdot_c_);
   JN_ = J;
-  const double keep = 1e-9 * std::max(scale_, 1.0);
+  const double keep = RANK_TOLERANCE * std::max(scale_, 1.0);
   for (Eigen::Index i = 0; i < k; ++i) {
     if (sv[i] > keep) {
       const auto vi = Vm.col(i);
@@ -175,7 +175,7 @@ void Law::one_constraint_level(const ExtendedTask& ext, double epsilon) {
   const double gain = s / (std::max(s * s, epsilon * epsilon) + d2);
   qdot_c_.noalias() = (gain * b_[m] / s) * c.transpose();
   within_budget(qdot_c_);
-  if (s > 1e-9 * std::max(scale_, 1.0)) {
+  if (s > RANK_TOLERANCE * std::max(scale_, 1.0)) {
     tmp_.head(m).noalias() = J * c.transpose();
     JN_.noalias() -= (tmp_.head(m) / (s * s)) * c;
   }

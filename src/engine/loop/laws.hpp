@@ -16,6 +16,8 @@ namespace clik {
 constexpr double CONDITION_RATIO = 0.01;
 // Largest joint step [rad or m] each level of law (10) may ask for in one sample.
 constexpr double STEP_BUDGET = 0.02;
+// A constraint direction counts above this singular value, relative to max(scale, 1).
+constexpr double RANK_TOLERANCE = 1e-9;
 
 struct LawSettings {
   LawKind kind = LawKind::transpose;
