@@ -4,8 +4,9 @@ A *sweep* is a base scenario plus the keys to vary (:mod:`clik.sweep.spec`);
 it expands into runs with stable ids, which run in batches, a Dask task each
 (:mod:`clik.sweep.execute`), on a local cluster or an existing one, each worker
 loading its robots once (:mod:`clik.sweep.worker`). One row per run is
-written as runs finish (:mod:`clik.sweep.store`); rerunning a sweep into the
-same folder computes only the runs missing there.
+written as runs finish (:mod:`clik.sweep.store`; read back by
+:mod:`clik.sweep.results`); rerunning a sweep into the same folder computes only
+the runs missing there.
 
 A *reachability map* (:mod:`clik.sweep.reach`) solves single-pose IK
 (:func:`clik.solve`) over a grid of target points: success, iterations and
@@ -17,8 +18,9 @@ written as a table and as a self-contained HTML view
 from clik.sweep.execute import SweepReport, dask_client, run_sweep
 from clik.sweep.reach import reach_map
 from clik.sweep.reach_data import ReachMap, ReachSpec
+from clik.sweep.results import read_results
 from clik.sweep.spec import RunSpec, Sweep, Vary, load_sweep, parse_sweep, run_id
-from clik.sweep.store import ResultStore, SweepOutputExistsError, read_results
+from clik.sweep.store import ResultStore, SweepOutputExistsError
 
 __all__ = [
     "ReachMap",

@@ -44,8 +44,9 @@ from clik.errors import ClikError, InputError, ScenarioError
 from clik.outputs.io import output_errors
 from clik.outputs.out_folder import output_lock
 from clik.sweep.progress import RunProgress
+from clik.sweep.results import read_statuses
 from clik.sweep.spec import RunSpec, Sweep, load_sweep
-from clik.sweep.store import CSV, PARQUET, ResultStore, check_folder, read_statuses
+from clik.sweep.store import CSV, PARQUET, ResultStore, check_folder
 from clik.sweep.worker import run_batch
 
 if TYPE_CHECKING:
