@@ -200,7 +200,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     per status, e.g. ``completed 118, deadlock 1, violated 1, raised 0``. A
     failed sweep also says so on stderr, ``--quiet`` or not.
     """
-    from clik.sweep.execute import run_sweep, status_line
+    from clik.sweep.execute import run_sweep
+    from clik.sweep.report import status_line
     from clik.sweep.spec import load_sweep
 
     sweep = load_sweep(args.sweep)
