@@ -35,7 +35,7 @@ from clik.errors import (
     ScenarioError,
     UnknownRobotError,
 )
-from clik.loop.tracking import ReachWarning, StabilityWarning, Tracker, track
+from clik.loop.tracker import ReachWarning, StabilityWarning, Tracker, track
 from clik.model.loading import ReferenceClippedWarning
 from clik.model.mimic import MimicJointWarning
 from clik.model.robot import Robot
