@@ -20,7 +20,15 @@ METHOD = ROOT / "docs" / "method.md"
 MAX_FUNCTION_LINES = 80
 """Longest function or method in ``clik/``, ``def`` line to last line."""
 
-APPLICATIONS = ("clik.cli", "clik.demo", "clik.bench", "clik.sweep", "clik.viz", "clik.plot")
+APPLICATIONS = (
+    "clik.cli",
+    "clik.commands",
+    "clik.demo",
+    "clik.bench",
+    "clik.sweep",
+    "clik.viz",
+    "clik.plot",
+)
 """The floor above the core: they may import the core, never the other way round."""
 
 

@@ -39,7 +39,8 @@ def sweep_rate(workers: int, runs: int) -> float:
     Raises:
         InputError: ``workers`` or ``runs`` is not an integer >= 1.
     """
-    from clik.sweep.execute import dask_client, run_sweep
+    from clik.sweep.cluster import dask_client
+    from clik.sweep.execute import run_sweep
 
     for name, value in (("workers", workers), ("runs", runs)):
         if not isinstance(value, int) or isinstance(value, bool) or value < 1:

@@ -1,6 +1,7 @@
 """The tracking loop: the closed-loop law integrated along a reference, sample by sample.
 
-``tracking`` is the specification (``Tracker``, ``track``, ``_Run.samples``);
+``tracker`` holds ``Tracker`` and ``track`` (settings and inputs checked once);
+``tracking`` is one run, the specification (``_Run.samples``);
 ``compiled_run`` hands the same samples to the compiled engine (``clik._engine``,
 ``src/engine/loop/``). Around the step: the laws (``laws``) and their gains
 (``gains``), the reference sampled chunk by chunk (``reference_stream``), the

@@ -8,294 +8,65 @@ One iteration per sample (docs/method.md, "Discrete time"), each a short step:
 4. the law, (9), (8) or (10), gives ``qdot_k``;
 5. stop checks (divergence, instability, deadlock) and limits crossed (violations);
 6. recording, then ``q_{k+1} = q_k (+) qdot_k dt`` (``pin.integrate``).
+
+This module is one run, :meth:`_Run.samples` the specification of the compiled
+engine's loop (:mod:`clik.loop.compiled_run`); the run is started, its settings
+and inputs checked, by :class:`~clik.loop.tracker.Tracker`.
 """
 
 from __future__ import annotations
 
 import math
 import time
-import warnings
-from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 import pinocchio as pin
 
-from clik.bounds import MAX_RECORD_BYTES, MAX_STEPS
 from clik.constraints.constraint_run import ConstraintRun
 from clik.constraints.violations import JointRange, ViolationMonitor
-from clik.engine import ENGINES
-from clik.errors import InputError
 from clik.loop.compiled_run import compiled_samples
-from clik.loop.gains import row_gains, stability_margin
-from clik.loop.laws import LawName, check_law, finite, nonlinear, prioritized, transpose
-from clik.loop.recording import Recorder, bytes_per_sample, kept_samples
-from clik.loop.reference_stream import REFERENCE_CHUNK, ReferenceChunks
+from clik.loop.laws import finite
+from clik.loop.recording import Recorder
 from clik.loop.stop_checks import StopChecks, StopSettings
-from clik.model.reach import reach_bound
 from clik.outputs.result import TrackingResult
 from clik.tasks.extended_task import ExtendedTask
-from clik.tasks.task import Task
-from clik.trajectory import Trajectory, time_grid
 
 if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
+    from clik.loop.laws import LawName
+    from clik.loop.reference_stream import ReferenceChunks
     from clik.model.robot import Robot
+    from clik.tasks.task import Task
 
 ProgressCallback = Callable[[int, int], None]
 
 
-class ReachWarning(UserWarning):
-    """The position reference leaves the frame's reach: the run will end in a deadlock."""
+class TrackerSettings(Protocol):
+    """What a run reads of the :class:`~clik.loop.tracker.Tracker` that starts it."""
 
+    task: Task
+    robot: Robot
+    law: LawName
+    engine: str
+    dt: float
+    K_task: np.ndarray
+    alpha: float
+    damping: float
+    beta_max: float
+    rows: int
+    constraints: ConstraintSet | None
 
-class StabilityWarning(UserWarning):
-    """The gains break ``alpha dt lambda_max(J J^T) < 2``: explicit Euler may go unstable."""
-
-
-def _positive(value: float, field: str, unit: str) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise InputError(field, f"a positive number {unit}", value) from None
-    if not math.isfinite(value) or value <= 0.0:
-        raise InputError(field, f"a positive finite number {unit}", value)
-    return value
-
-
-class Tracker:
-    """The CLIK loop for one robot, task and law.
-
-    Build once, then call :meth:`run` with a trajectory (and again with another
-    one). Each run owns its extended task, its record and its constraint state
-    (:class:`~clik.constraints.ConstraintRun`), so trackers and runs never share mutable state.
-
-    Args:
-        task: The task (frame, kind, mask).
-        law: ``"transpose"`` (9), ``"nonlinear"`` (8) or ``"pseudoinverse"`` (10).
-        gain: ``alpha`` [1/s], a scalar or one value per task row.
-        dt: Sample time [s].
-        damping: Constant damping ``lambda_0`` of law (10) (on top of the automatic
-            damping near singularities, see :func:`clik.loop.laws.damped_solve`).
-        beta_max: Bound on the nonlinear law's extra gain [1/s] (default ``2 alpha``).
-        constraints: Optional constraint rows (obstacles, joint ranges), eq. (20)-(25).
-        engine: ``"compiled"`` (default: the samples run in ``clik._engine``) or
-            ``"python"`` (this module's loop, the engine's readable specification).
-            Both give the same statuses, events and joint trajectories.
-    """
-
-    def __init__(
-        self,
-        task: Task,
-        law: LawName = "transpose",
-        gain: float | Sequence[float] = 1000.0,
-        dt: float = 1e-3,
-        damping: float = 0.0,
-        beta_max: float | None = None,
-        constraints: ConstraintSet | None = None,
-        engine: str = "compiled",
-    ) -> None:
-        if engine not in ENGINES:
-            raise InputError("engine", " or ".join(repr(e) for e in ENGINES), engine)
-        self.engine = engine
-        self.task = task
-        self.robot = task.robot
-        self.law = check_law(law)
-        self.dt = _positive(dt, "dt", "[s]")
-        self.K_task = row_gains(gain, task.m, "gain")
-        damping = float(damping)
-        if not math.isfinite(damping) or damping < 0.0:
-            raise InputError("damping", "a finite number >= 0", damping)
-        self.damping = damping
-        self.alpha = float(np.max(self.K_task))
-        self.beta_max = (
-            2.0 * self.alpha if beta_max is None else _positive(beta_max, "beta_max", "[1/s]")
-        )
-        self.constraints = constraints
-        m, nv = task.m, self.robot.nv
-        limit = constraints.row_limit(m, self.law) if constraints is not None else 0
-        self.rows = m + limit
-        self._b = np.zeros(self.rows)
-        self._work = np.zeros(self.rows)
-        self._jte = np.zeros(nv)
-
-    # -- the law -----------------------------------------------------------------------
-
-    def law_velocity(self, ext: ExtendedTask, r: int, out: np.ndarray) -> float:
-        """Joint velocity [rad/s] of the law on the first ``r`` rows of the extended task.
-
-        Returns:
-            Law (10): the fraction of the task's demand the law could not realise
-            (:func:`clik.loop.laws.prioritized`); laws (9) and (8): 0.
-        """
-        m = ext.m
-        if self.law == "pseudoinverse":
-            b = ext.demand(r, self._b[:r])
-            return prioritized(ext.J[:m], b[:m], ext.J[m:r], b[m:r], out, self.damping, self.dt)
-        J, e, K, ff, work = ext.J[:r], ext.e[:r], ext.K[:r], ext.ff[:r], self._work[:r]
-        if self.law == "transpose":
-            transpose(J, e, K, ff, out, work)
-        else:
-            nonlinear(J, e, K, ff, out, work, self._jte, self.beta_max)
-        return 0.0
-
-    # -- the loop ----------------------------------------------------------------------
-
-    def run(
-        self,
-        trajectory: Trajectory,
-        q0: np.ndarray | Sequence[float] | None = None,
-        *,
-        record_every: int = 1,
-        progress: ProgressCallback | None = None,
-        deadlock_window: float = 0.1,
-        deadlock_ratio: float = 1e-4,
-        deadlock_error: float = 1e-3,
-        max_joint_step: float = 1.0,
-        settle: float = 0.0,
-        stall_window: float = 0.5,
-        stall_progress: float = 0.01,
-    ) -> TrackingResult:
-        """Track ``trajectory`` from ``q0`` (default: the robot's reference configuration).
-
-        Args:
-            trajectory: Desired task trajectory; sampled chunk by chunk on the time grid.
-            q0: Initial configuration (nq,).
-            record_every: Keep every k-th sample (and the last) in the result's arrays;
-                scalars such as ``max_task_error`` still see every sample.
-            progress: Called as ``progress(k, N)`` about a hundred times during the run.
-            deadlock_window: Time [s] the deadlock condition must hold before stopping.
-            deadlock_ratio: Laws (9), (8): deadlock when
-                ``|J_e^T K e_e| <= ratio |J_e|_F |K e_e|``...
-            deadlock_error: ... while the task error norm exceeds this [m or rad] (law
-                (10): while most of the task's demand is not realised).
-            max_joint_step: A joint step ``|qdot| dt`` above this [rad or m] stops the run
-                with status ``diverged``; checked every sample.
-            settle: Extra time [s] after the trajectory's end, holding its final value.
-            stall_window: With the reference at rest, a task error that falls by less
-                than ``stall_progress`` (a fraction) over this time [s] is a deadlock too.
-            stall_progress: See ``stall_window``.
-
-        Raises:
-            InputError: A bad argument.
-            InfeasibleError: ``q0`` outside the robot's joint limits.
-
-        Warns:
-            ReachWarning: A position of the reference lies beyond the frame's reach.
-            StabilityWarning: The gains break explicit Euler's bound at ``q0``.
-        """
-        robot = self.robot
-        q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
-        robot.check_within_limits(q, "q0")
-        if not isinstance(record_every, int | np.integer) or record_every < 1:
-            raise InputError("record_every", "an integer >= 1", record_every)
-        if not (math.isfinite(settle) and settle >= 0.0):
-            raise InputError("settle", "a time >= 0 [s]", settle)
-        self.check_size(trajectory.duration + settle, int(record_every))
-        t = time_grid(trajectory.duration + settle, self.dt)
-        chunks, out_of_reach = self._reference(trajectory, t)
-        self._warn_stability(q)
-        settings = StopSettings(
-            deadlock_window, deadlock_ratio, deadlock_error, max_joint_step, stall_window,
-            stall_progress,
-        )  # fmt: skip
-        run = _Run(self, t, chunks, int(record_every), settings, progress)
-        return run.execute(q, out_of_reach)
-
-    def check_size(self, duration: float, record_every: int) -> None:
-        """Refuse a run too long or whose record would not fit in memory.
-
-        At most :data:`~clik.bounds.MAX_STEPS` samples, and a record within
-        :data:`~clik.bounds.MAX_RECORD_BYTES`.
-
-        Args:
-            duration: The run's time span, trajectory and settling [s].
-            record_every: The decimation asked for.
-
-        Raises:
-            InputError: ``dt`` too small for ``duration``; or ``record_every`` too small
-                for this run, the message giving the smallest that fits.
-        """
-        steps_needed = duration / self.dt + 1
-        if steps_needed > MAX_STEPS:
-            raise InputError(
-                "dt",
-                f"a step giving at most {MAX_STEPS:.0e} steps over the trajectory's "
-                f"{duration:g} s (this one gives {steps_needed:.3g})",
-                self.dt,
-            )
-        N = round(duration / self.dt) + 1
-        cset = self.constraints
-        n_obs = 0 if cset is None else len(cset.obstacles)
-        slots = 0 if cset is None else max(cset.row_limit(self.task.m, self.law), 1)
-        size = bytes_per_sample(self.robot.nq, self.robot.nv, n_obs, slots)
-        if kept_samples(N, record_every) * size <= MAX_RECORD_BYTES:
-            return
-        fits = MAX_RECORD_BYTES // size  # kept_samples(N, every) = ceil((N - 1) / every) + 1
-        least = -(-(N - 1) // (fits - 1))
-        mb = kept_samples(N, record_every) * size / 2**20
-        raise InputError(
-            "record_every",
-            f"an integer >= {least} for this run: keeping "
-            + ("all" if record_every == 1 else f"every {record_every}-th")
-            + f" of its {N} samples ({size} bytes each) takes {mb:.0f} MB, above the budget of "
-            f"{MAX_RECORD_BYTES // 2**20} MB (clik.bounds.MAX_RECORD_BYTES)",
-            record_every,
-        )
-
-    def _reference(self, trajectory: Trajectory, t: np.ndarray) -> tuple[ReferenceChunks, str]:
-        """The reference in chunks, and why it is out of reach ("" when it is not).
-
-        A position beyond the frame's reach is named here, before the run, by a warning.
-        """
-        task = self.task
-        center, reach, first = (None, math.inf, "")
-        if task.has_position:
-            center, reach, first = reach_bound(self.robot, task.frame_id)
-        finite = math.isfinite(reach)
-        chunks = ReferenceChunks(task, trajectory, t, REFERENCE_CHUNK, center if finite else None)
-        farthest, when = chunks.farthest
-        if not (finite and farthest > reach + 1e-9):
-            return chunks, ""
-        out_of_reach = (
-            f"the reference is out of reach: at t = {when:.6g} s it lies {farthest:.4g} m "
-            f"from joint {first!r}, farther than the {reach:.4g} m that frame "
-            f"{task.frame!r} can reach (the sum of the chain's link offsets)"
-        )
-        warnings.warn(out_of_reach, ReachWarning, stacklevel=4)
-        return chunks, out_of_reach
-
-    def _warn_stability(self, q: np.ndarray) -> None:
-        """Warn when the gains break explicit Euler's bound at ``q0``."""
-        if self.law == "pseudoinverse":
-            gains = [self.alpha]
-            if self.constraints is not None:
-                gains += [k.gain for k in self.constraints.kinds if k.gain is not None]
-            kdt = max(gains) * self.dt
-            if kdt >= 2.0:
-                warnings.warn(
-                    f"gain: K dt = {kdt:.3g} >= 2: law (10) is unstable (its error map is "
-                    "e_{k+1} = (1 - K dt) e_k); lower the gain or dt",
-                    StabilityWarning,
-                    stacklevel=3,
-                )
-            return
-        margin = stability_margin(self.task.jacobian(q), self.K_task, self.dt)
-        if margin >= 2.0:
-            warnings.warn(
-                f"gain: alpha dt lambda_max(J J^T) = {margin:.3g} >= 2 at q0: explicit Euler "
-                "is unstable along the stiffest task direction; lower the gain or dt",
-                StabilityWarning,
-                stacklevel=3,
-            )
+    def law_velocity(self, ext: ExtendedTask, r: int, out: np.ndarray) -> float: ...  # noqa: D102
 
 
 class _Run:
-    """One run of a :class:`Tracker`: its arrays, constraint state, checks and record."""
+    """One run of a ``Tracker``: its arrays, constraint state, checks and record."""
 
     def __init__(
         self,
-        tracker: Tracker,
+        tracker: TrackerSettings,
         t: np.ndarray,
         chunks: ReferenceChunks,
         record_every: int,
@@ -584,31 +355,3 @@ def _joint_range(robot: Robot, cset: ConstraintSet | None) -> JointRange:
 
 
 LWA = pin.LOCAL_WORLD_ALIGNED
-
-
-def track(
-    task: Task,
-    trajectory: Trajectory,
-    *,
-    q0: np.ndarray | Sequence[float] | None = None,
-    law: LawName = "transpose",
-    gain: float | Sequence[float] = 1000.0,
-    dt: float = 1e-3,
-    damping: float = 0.0,
-    constraints: ConstraintSet | None = None,
-    record_every: int = 1,
-    progress: ProgressCallback | None = None,
-    engine: str = "compiled",
-) -> TrackingResult:
-    """Track a Cartesian trajectory with a CLIK law (the one-call form of :class:`Tracker`).
-
-    Example:
-        >>> robot = clik.Robot.load("planar4r")
-        >>> task = clik.Task(robot, "tip", "position", axes=["x", "y"])
-        >>> q0 = np.radians([180, -30, -90, -30])
-        >>> result = clik.track(task, clik.trajectory.Line(...), q0=q0)
-    """
-    tracker = Tracker(
-        task, law=law, gain=gain, dt=dt, damping=damping, constraints=constraints, engine=engine
-    )
-    return tracker.run(trajectory, q0, record_every=record_every, progress=progress)

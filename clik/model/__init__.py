@@ -3,7 +3,8 @@
 :class:`~clik.model.robot.Robot` is the entry point (``Robot.load``); the
 concerns it delegates sit one per module: where a robot is read from
 (``sources``), the strict checks on a URDF and its meshes before any library
-reads them (``urdf_check``, ``mesh_check``), xacro expansion
+reads them (``urdf_check``, with ``urdf_joints``, ``urdf_links`` and
+``urdf_numbers``; ``mesh_check``), xacro expansion
 (``xacro_expand``), the models built from a checked URDF (``loading``), joint
 kinds and units (``joints``), locked and mimic joints (``locking``, ``mimic``)
 and configuration checks (``configuration``). Beside them, what the model alone

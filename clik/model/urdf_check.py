@@ -15,41 +15,30 @@ elements and :data:`MAX_ATTRIBUTES` attributes per element, counted on the raw
 bytes before the XML parser runs; at most :data:`MAX_LINKS` links and joints,
 :data:`MAX_MOVABLE_JOINTS` movable joints, :data:`MAX_DEPTH` joints from the root
 to any link, and names of at most
-:data:`MAX_NAME_LENGTH` characters. Numbers must lie in physical ranges (:data:`RANGES`): positions
-and sizes within :data:`~clik.model.mesh_check.MAX_COORDINATE` [m], angles within
-:data:`MAX_ANGLE` [rad], masses within :data:`MAX_MASS` [kg]. Mesh files are
-checked by :func:`clik.model.mesh_check.check_mesh_file` (regular file, format,
-size, counts, symlinks and side files that stay inside their package).
+:data:`MAX_NAME_LENGTH` characters. Numbers must lie in physical ranges
+(:data:`~clik.model.urdf_numbers.RANGES`, :mod:`clik.model.urdf_numbers`):
+positions and sizes within :data:`~clik.model.mesh_check.MAX_COORDINATE` [m],
+angles within :data:`~clik.model.urdf_numbers.MAX_ANGLE` [rad], masses within
+:data:`~clik.model.urdf_numbers.MAX_MASS` [kg]. Joints are checked
+by :mod:`clik.model.urdf_joints`, links and their mesh files by
+:mod:`clik.model.urdf_links` (with :func:`clik.model.mesh_check.check_mesh_file`:
+regular file, format, size, counts, symlinks and side files that stay inside
+their package).
 """
 
 from __future__ import annotations
 
-import math
-import os
-import posixpath
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 from lxml import etree
 
-from clik import errors
 from clik.errors import RobotLoadError
-from clik.model.mesh_check import (
-    MAX_COORDINATE,
-    MeshRefused,
-    check_mesh_file,
-    check_scale,
-    regular_file_problem,
-)
-
-MOVABLE_TYPES = ("revolute", "continuous", "prismatic")
-"""Joint types that add a degree of freedom to a fixed-base arm."""
-
-JOINT_TYPES = (*MOVABLE_TYPES, "fixed", "floating", "planar")
-
-Fail = Callable[..., RobotLoadError]
-"""Builds the error for a problem found at an element: ``fail(problem, element)``."""
+from clik.model.mesh_check import regular_file_problem
+from clik.model.urdf_joints import MOVABLE_TYPES, joint_ends
+from clik.model.urdf_links import check_link
+from clik.model.urdf_numbers import SHOWN_NAME, Fail, shown
 
 MAX_URDF_BYTES = 64 * 2**20
 """Largest URDF (or SRDF, or xacro expansion) read [bytes]."""
@@ -73,25 +62,6 @@ MAX_MOVABLE_JOINTS = 128
 MAX_NAME_LENGTH = 1000
 """Longest link or joint name [characters]."""
 
-MAX_ANGLE = 4 * math.pi
-"""Largest absolute angle in an origin's ``rpy`` [rad] (two turns)."""
-
-MAX_MASS = 1e6
-"""Largest mass [kg] and largest inertia entry [kg m^2]."""
-
-MAX_LIMIT = 1e16
-"""Largest absolute joint limit (position [rad or m], effort, velocity), dynamics value
-(damping, friction) and mesh scale factor: 1e16 is the URDF convention for "no limit"."""
-
-RANGES = {
-    "position": MAX_COORDINATE,
-    "angle": MAX_ANGLE,
-    "mass": MAX_MASS,
-    "limit": MAX_LIMIT,
-    "scale": math.inf,  # each factor's magnitude in clik.model.mesh_check.SCALE_RANGE
-}
-"""Largest absolute value of each kind of URDF number."""
-
 _BUDGETS = {
     "MAX_URDF_BYTES": (MAX_URDF_BYTES, "bytes"),
     "MAX_ELEMENTS": (MAX_ELEMENTS, "elements"),
@@ -101,9 +71,6 @@ _BUDGETS = {
     "MAX_MOVABLE_JOINTS": (MAX_MOVABLE_JOINTS, "movable joints"),
     "MAX_DEPTH": (MAX_DEPTH, "joints from the root link"),
 }
-
-SHOWN_NAME = 60
-"""Characters of a long name shown in messages."""
 
 _ENTITY = re.compile(rb"<!ENTITY")
 _XINCLUDE = "{http://www.w3.org/2001/XInclude}"
@@ -213,11 +180,6 @@ def _check_budgets(path: Path, data: bytes) -> None:
         offset += len(chunk) + 1
 
 
-def shown(name: str) -> str:
-    """A name as messages show it: quoted, cut to :data:`SHOWN_NAME` characters when long."""
-    return errors.shown(name, SHOWN_NAME)
-
-
 def check_urdf(
     path: str | Path, package_dirs: Sequence[str | Path] = (), text: str | None = None
 ) -> etree._Element:
@@ -229,9 +191,9 @@ def check_urdf(
     links that exist; a tree (no cycle, a single root link, each link the child
     of at most one joint); at least one movable joint; numbers in origins, axes,
     limits, dynamics, inertials and geometry that are finite and in their range
-    (:data:`RANGES`); ``lower <= upper`` for revolute and prismatic joints; no
-    negative effort or velocity limit, mass or primitive size (box, cylinder,
-    sphere; a zero radius is allowed: planar arms use segments); mesh scales in
+    (:data:`~clik.model.urdf_numbers.RANGES`); ``lower <= upper`` for revolute and
+    prismatic joints; no negative effort or velocity limit, mass or primitive size
+    (box, cylinder, sphere; a zero radius is allowed: planar arms use segments); mesh scales in
     :data:`~clik.model.mesh_check.SCALE_RANGE`; mesh files that pass
     :func:`~clik.model.mesh_check.check_mesh_file`, where ``package://pkg/rest`` is
     looked up as ``<dir>/pkg/rest`` for each ``dir`` in ``package_dirs`` and must
@@ -275,51 +237,13 @@ def check_urdf(
         raise fail(
             _over_budget(f"the robot has {movable} movable joints", "MAX_MOVABLE_JOINTS"), root
         )
-    parent_of = _joint_ends(links, joints, fail)
+    parent_of = joint_ends(links, joints, fail)
     _check_tree(links, parent_of, fail)
     if not any(joint.get("type") in MOVABLE_TYPES for joint in joints.values()):
         raise fail("the robot has no movable (revolute, continuous or prismatic) joint", root)
     for name, link in links.items():
-        _check_link(name, link, path, package_dirs, fail)
+        check_link(name, link, path, package_dirs, fail)
     return root
-
-
-def _joint_ends(
-    links: dict[str, etree._Element], joints: dict[str, etree._Element], fail: Fail
-) -> dict[str, str]:
-    """Child link -> parent link, checking each joint's type, ends and numbers."""
-    parent_of: dict[str, str] = {}  # child link -> parent link
-    joint_of: dict[str, str] = {}  # child link -> joint name
-    for name, joint in joints.items():
-        kind = joint.get("type")
-        if kind not in JOINT_TYPES:
-            raise fail(
-                f"joint {shown(name)} has type {shown(str(kind))}; "
-                f"known types: {', '.join(JOINT_TYPES)}",
-                joint,
-            )
-        ends = {}
-        for end in ("parent", "child"):
-            element = joint.find(end)
-            link = None if element is None else element.get("link")
-            if link is None:
-                raise fail(f"joint {shown(name)} has no <{end} link=...>", joint)
-            if link not in links:
-                raise fail(
-                    f"joint {shown(name)} names {end} link {shown(link)} that does not exist",
-                    element,
-                )
-            ends[end] = link
-        child = ends["child"]
-        if child in joint_of:
-            raise fail(
-                f"link {shown(child)} is the child of two joints ({shown(joint_of[child])} and "
-                f"{shown(name)}): the joints do not form a tree",
-                joint,
-            )
-        parent_of[child], joint_of[child] = ends["parent"], name
-        _check_joint_numbers(name, joint, fail)
-    return parent_of
 
 
 def _named(root: etree._Element, tag: str, fail: Fail) -> dict[str, etree._Element]:
@@ -382,179 +306,3 @@ def _check_tree(links: dict[str, etree._Element], parent_of: dict[str, str], fai
             "every link but one must be a joint's child",
             links[roots[1]],
         )
-
-
-_UNITS = {"position": "m", "angle": "rad", "mass": "kg or kg m^2", "limit": "", "scale": ""}
-
-
-def _numbers(
-    element: etree._Element,
-    attribute: str,
-    count: int,
-    what: str,
-    fail: Fail,
-    kind: str = "position",
-    nonnegative: bool = False,
-) -> list[float]:
-    """Read ``count`` finite numbers from an attribute, each within ``RANGES[kind]``.
-
-    Each must also be ``>= 0`` when ``nonnegative``.
-    """
-    text = element.get(attribute)
-    try:
-        values = [float(word) for word in text.split()] if text is not None else []
-    except ValueError:
-        values = []
-    written = shown(str(text))
-    if len(values) != count:
-        raise fail(f"{what} {attribute}={written} is not {count} number(s)", element)
-    if not all(math.isfinite(value) for value in values):
-        raise fail(f"{what} {attribute}={written} is not finite", element)
-    if nonnegative and any(value < 0.0 for value in values):
-        raise fail(f"{what} {attribute}={written} is negative", element)
-    bound = RANGES[kind]
-    if any(abs(value) > bound for value in values):
-        low = 0 if nonnegative else -bound
-        raise fail(
-            f"{what} {attribute}={written} is out of range: each value must be within "
-            f"[{low:g}, {bound:g}] {_UNITS[kind]}".rstrip(),
-            element,
-        )
-    return values
-
-
-def _check_origin(parent: etree._Element, what: str, fail: Fail) -> None:
-    origin = parent.find("origin")
-    if origin is not None:
-        for attribute, kind in (("xyz", "position"), ("rpy", "angle")):
-            if origin.get(attribute) is not None:
-                _numbers(origin, attribute, 3, f"{what} origin", fail, kind)
-
-
-def _check_joint_numbers(name: str, joint: etree._Element, fail: Fail) -> None:
-    what = f"joint {shown(name)}"
-    _check_origin(joint, what, fail)
-    kind = joint.get("type")
-    axis = joint.find("axis")
-    if axis is not None and axis.get("xyz") is not None:
-        direction = _numbers(axis, "xyz", 3, f"{what} axis", fail)
-        if kind in MOVABLE_TYPES and not any(direction):
-            raise fail(f"{what} has a zero axis", axis)
-    dynamics = joint.find("dynamics")
-    for attribute in ("damping", "friction"):
-        if dynamics is not None and dynamics.get(attribute) is not None:
-            _numbers(dynamics, attribute, 1, f"{what} dynamics", fail, "limit")
-    limit = joint.find("limit")
-    if limit is None:
-        if kind in ("revolute", "prismatic"):
-            raise fail(f"{what} is {kind} but has no <limit>", joint)
-        return
-    values = {  # effort and velocity are bounds on magnitudes: never negative
-        attribute: _numbers(
-            limit, attribute, 1, f"{what} limit", fail, "limit", attribute in _MAGNITUDES
-        )[0]
-        for attribute in ("lower", "upper", *_MAGNITUDES)
-        if limit.get(attribute) is not None
-    }
-    lower, upper = values.get("lower", 0.0), values.get("upper", 0.0)
-    if kind in ("revolute", "prismatic") and lower > upper:
-        raise fail(f"{what} has lower limit {lower:g} above its upper limit {upper:g}", limit)
-
-
-_MAGNITUDES = ("effort", "velocity")
-
-_SHAPES = {"box": {"size": 3}, "cylinder": {"radius": 1, "length": 1}, "sphere": {"radius": 1}}
-"""Primitive shapes and their size attributes (finite, >= 0; a radius 0 is a segment)."""
-
-
-def _check_link(
-    name: str, link: etree._Element, urdf: Path, package_dirs: Sequence[str | Path], fail: Fail
-) -> None:
-    what = f"link {shown(name)}"
-    inertial = link.find("inertial")
-    if inertial is not None:
-        _check_origin(inertial, f"{what} inertial", fail)
-        mass = inertial.find("mass")
-        if mass is not None:
-            _numbers(mass, "value", 1, f"{what} mass", fail, "mass", nonnegative=True)
-        inertia = inertial.find("inertia")
-        for attribute in () if inertia is None else inertia.attrib:
-            _numbers(inertia, attribute, 1, f"{what} inertia", fail, "mass")
-    for kind in ("visual", "collision"):
-        for element in link.findall(kind):
-            _check_origin(element, f"{what} {kind}", fail)
-            for shape in element.iterfind("geometry/*"):
-                for attribute, count in _SHAPES.get(shape.tag, {}).items():
-                    _numbers(
-                        shape,
-                        attribute,
-                        count,
-                        f"{what} {kind} {shape.tag}",
-                        fail,
-                        "position",
-                        True,
-                    )
-                if shape.tag == "mesh":
-                    _check_mesh(shape, f"{what} {kind} mesh", urdf, package_dirs, fail)
-
-
-def _check_mesh(
-    mesh: etree._Element,
-    what: str,
-    urdf: Path,
-    package_dirs: Sequence[str | Path],
-    fail: Fail,
-) -> None:
-    """A mesh file must pass the cheap mesh checks and stay inside its folder."""
-    scale = [1.0, 1.0, 1.0]
-    if mesh.get("scale") is not None:
-        scale = _numbers(mesh, "scale", 3, what, fail, "scale")  # range: check_scale
-    filename = mesh.get("filename")
-    if not filename:
-        raise fail("a <mesh> has no filename", mesh)
-    file, root = _mesh_location(filename, mesh, urdf, package_dirs, fail)
-    try:
-        check_scale(scale, what)
-        facts = check_mesh_file(file, scale, root, what=f"{what} {shown(filename)}: file")
-        for side in facts.side_files:  # an OBJ's material files: inside the folder too
-            _check_side_file(facts.path.parent / side, root)
-    except MeshRefused as refused:
-        raise fail(str(refused), mesh) from None
-
-
-def _check_side_file(side: Path, root: Path) -> None:
-    """An OBJ ``mtllib`` file must stay inside ``root`` and, if it exists, be a regular file."""
-    if not side.resolve().is_relative_to(root.resolve()):
-        raise MeshRefused(f"its material file (mtllib) {side} leaves the folder {root}")
-    if os.path.lexists(side):
-        problem = regular_file_problem(side)
-        if problem is not None:
-            raise MeshRefused(f"its material file (mtllib) {side} {problem}")
-
-
-def _mesh_location(
-    filename: str,
-    mesh: etree._Element,
-    urdf: Path,
-    package_dirs: Sequence[str | Path],
-    fail: Fail,
-) -> tuple[Path, Path]:
-    """The mesh file a ``filename`` names and the folder it must stay inside."""
-    if filename.startswith("package://"):
-        # "package:///pkg/..." (extra slash) is read as "package://pkg/..." like Pinocchio does
-        package, _, rest = filename.removeprefix("package://").lstrip("/").partition("/")
-        inside = posixpath.normpath(rest or ".")
-        if not package or package in (".", "..") or inside.startswith(("..", "/")):
-            raise fail(f"mesh {shown(filename)} leaves its package folder", mesh)
-        for folder in package_dirs:  # the first folder holding it, as Pinocchio looks
-            candidate = Path(folder) / package / inside
-            if os.path.lexists(candidate):
-                return candidate, Path(folder) / package
-        searched = ", ".join(map(str, package_dirs)) or "none given"
-        raise fail(f"mesh file {shown(filename)} not found (package folders: {searched})", mesh)
-    if "://" in filename and not filename.startswith("file://"):
-        raise fail(f"mesh {shown(filename)} uses an unsupported URI scheme", mesh)
-    file = urdf.parent / filename.removeprefix("file://")
-    if not os.path.lexists(file):
-        raise fail(f"mesh file {shown(filename)} not found (looked for {file})", mesh)
-    return file, Path(os.path.normpath(file.absolute().parent))

@@ -23,7 +23,8 @@ from clik.errors import (
     JointNotFound,
     ScenarioError,
 )
-from clik.loop.tracking import ProgressCallback, Tracker
+from clik.loop.tracker import Tracker
+from clik.loop.tracking import ProgressCallback
 from clik.model.reach import reach_bound
 from clik.model.robot import Robot
 from clik.outputs.result import TrackingResult

@@ -47,7 +47,7 @@ import numpy as np
 from clik.constraints import ConstraintSet
 from clik.constraints.kind import Violation
 from clik.errors import InputError
-from clik.loop.tracking import Tracker
+from clik.loop.tracker import Tracker
 from clik.solving.pose_check import PoseCheck, constraint_label
 from clik.solving.solve_result import SolveResult
 from clik.tasks.task import Task

@@ -1,4 +1,4 @@
-"""What :func:`clik.solve` returns: :class:`SolveResult`."""
+"""What :func:`clik.solve` returns: :class:`SolveResult`, and its reason in words."""
 
 from __future__ import annotations
 
@@ -50,3 +50,16 @@ class SolveResult:
     def blocked(self) -> bool:
         """True when the target is reached without the constraints but not with them."""
         return self.blocked_by is not None
+
+
+def converged_reason(iterations: int) -> str:
+    """The reason of a solve that converged."""
+    return f"converged in {iterations} iterations"
+
+
+def failure_reason(attempts: int, iterations: int, pos: float, rot: float) -> str:
+    """The reason of a solve that did not converge, with its best attempt's errors [m], [rad]."""
+    return (
+        f"no convergence after {attempts} attempt(s), {iterations} iterations; best "
+        f"attempt: position error {pos:.3g} m, orientation error {rot:.3g} rad"
+    )

@@ -28,7 +28,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clik.errors import InputError
-from clik.loop.tracking import ProgressCallback, ReachWarning, StabilityWarning, Tracker
+from clik.loop.tracker import ReachWarning, StabilityWarning, Tracker
+from clik.loop.tracking import ProgressCallback
 from clik.speed.speed_limits import SpeedBounds, SpeedLimits
 from clik.speed.time_scaling import retime, slowdown
 

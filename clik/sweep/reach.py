@@ -20,8 +20,8 @@ with ``constraints=`` (:mod:`clik.solving.constrained_solve`): a point whose unc
 pose misses a constraint and that the constrained law cannot reach clear of them is
 *blocked*, a category of its own beside *unreachable*.
 
-Points are solved in chunks, as Dask tasks (the same local or remote cluster
-as :mod:`clik.sweep.execute`); a worker loads the robot once (with a scenario, the
+Points are solved in chunks, as Dask tasks (on the same local or remote cluster
+as a sweep, :mod:`clik.sweep.cluster`); a worker loads the robot once (with a scenario, the
 spec carries the file's contents, and each worker rebuilds the robot and the
 :class:`~clik.constraints.ConstraintSet` from them once). The spec and the
 map are in :mod:`clik.sweep.reach_data`; :func:`clik.sweep.reach_output.write_reach`
@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clik.errors import InputError, RobotLoadError, ScenarioError
-from clik.sweep.execute import dask_client
+from clik.sweep.cluster import dask_client
 from clik.sweep.progress import RunProgress
 from clik.sweep.reach_data import BLOCKED, COLUMNS, ReachMap, ReachSpec
 

@@ -32,7 +32,6 @@ import json
 import os
 import shutil
 import uuid
-from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,6 +39,8 @@ from typing import Any
 
 from clik.errors import InputError, OutputExistsError
 from clik.outputs.io import write_json
+from clik.sweep.cells import column_types, csv_text
+from clik.sweep.parquet_parts import dedup, part_files, read_parquet, write_part
 
 MANIFEST = "sweep.json"
 PARQUET = "results.parquet"
@@ -160,7 +161,7 @@ class ResultStore:
         else:
             if fmt == "auto":
                 fmt = "parquet"
-            param_types = _param_types(param_values) if fmt == "parquet" else {}
+            param_types = column_types(param_values) if fmt == "parquet" else {}
             json_parameters = [p for p in param_values if param_types.get(p, "json") == "json"]
             write_json(
                 out / MANIFEST,
@@ -179,9 +180,9 @@ class ResultStore:
     def _load_ids(self) -> None:
         if self.fmt == "parquet":
             self.path.mkdir(exist_ok=True)
-            parts = _part_files(self.path)
+            parts = part_files(self.path)
             self._parts = len(parts)
-            table = _read_parquet(self.path, ["run_id"])
+            table = read_parquet(self.path, ["run_id"])
             ids = [] if table is None else table.column("run_id").to_pylist()
             self.ids = set(ids)
             if len(ids) != len(self.ids):  # a compaction was interrupted: finish it
@@ -230,7 +231,7 @@ class ResultStore:
         table = pa.Table.from_pydict(data, schema=schema)
         self._parts += 1
         name = f"part-{self._parts:06d}-{uuid.uuid4().hex[:8]}.parquet"
-        _write_part(table, self.path / name)
+        write_part(table, self.path / name)
 
     def _append_csv(self, rows: list[dict[str, Any]]) -> None:
         size = self.path.stat().st_size
@@ -238,7 +239,7 @@ class ResultStore:
             with open(self.path, "a", newline="", encoding="utf-8") as f:
                 writer = csv.writer(f)
                 for row in rows:
-                    cells = [_csv_text(row.get(c), c in self.parameters) for c in self.columns]
+                    cells = [csv_text(row.get(c), c in self.parameters) for c in self.columns]
                     writer.writerow(cells)
                 f.flush()
                 os.fsync(f.fileno())
@@ -250,13 +251,13 @@ class ResultStore:
         """Rewrite a Parquet dataset folder as one part file (rows deduplicated by id)."""
         if self.fmt != "parquet":
             return
-        parts = _part_files(self.path)
-        table = _read_parquet(self.path)
+        parts = part_files(self.path)
+        table = read_parquet(self.path)
         if table is None or (len(parts) <= 1 and table.num_rows == len(self.ids)):
             return
-        table = _dedup(table)
+        table = dedup(table)
         name = f"part-{len(parts) + 1:06d}-{uuid.uuid4().hex[:8]}.parquet"
-        _write_part(table, self.path / name)
+        write_part(table, self.path / name)
         for part in parts:
             part.unlink()
         self._parts = 1
@@ -290,7 +291,7 @@ class ResultStore:
         return folder
 
 
-# -- reading ---------------------------------------------------------------------------
+# -- the folder ------------------------------------------------------------------------
 
 
 def check_folder(out: Path, fingerprint: str, force: bool = False) -> bool:
@@ -318,90 +319,6 @@ def check_folder(out: Path, fingerprint: str, force: bool = False) -> bool:
     return False
 
 
-def _manifest_of(out: Path) -> dict[str, Any]:
-    """The manifest of a sweep's output folder.
-
-    Raises:
-        FileNotFoundError: ``out`` holds no sweep manifest.
-    """
-    manifest = _read_manifest(out)
-    if manifest is None:
-        raise FileNotFoundError(f"{out / MANIFEST}: not a sweep output folder")
-    return manifest
-
-
-def read_results(out: str | Path) -> list[dict[str, Any]]:
-    """The rows of a sweep's output folder, one per run id, parameters decoded.
-
-    Works for both formats; lists come back as lists, missing numbers as None.
-
-    Raises:
-        FileNotFoundError: ``out`` holds no sweep manifest.
-    """
-    out = Path(out)
-    manifest = _manifest_of(out)
-    if manifest["format"] == "parquet":
-        return _parquet_rows(out / PARQUET, set(manifest.get("json_parameters", [])))
-    return _csv_rows(out / CSV, list(manifest["parameters"]))
-
-
-def _parquet_rows(folder: Path, json_parameters: set[str]) -> list[dict[str, Any]]:
-    """The rows of a Parquet dataset folder, one per run id, JSON parameters decoded."""
-    table = _read_parquet(folder)
-    rows: list[dict[str, Any]] = [] if table is None else _dedup(table).to_pylist()
-    for row in rows:
-        for p in json_parameters:
-            if row.get(p) is not None:
-                row[p] = json.loads(row[p])
-    return rows
-
-
-def _csv_rows(path: Path, parameters: list[str]) -> list[dict[str, Any]]:
-    """The rows of a CSV results table, one per run id (the first), cells typed."""
-    types = dict(COLUMNS)
-    rows: list[dict[str, Any]] = []
-    seen: set[str] = set()
-    with open(path, newline="", encoding="utf-8") as f:
-        for raw in csv.DictReader(f):
-            if raw["run_id"] in seen:
-                continue
-            seen.add(raw["run_id"])
-            row: dict[str, Any] = {"run_id": raw["run_id"]}
-            for p in parameters:
-                row[p] = json.loads(raw[p]) if raw[p] != "" else None
-            for c, kind in types.items():
-                row[c] = _from_csv(raw.get(c, ""), kind)
-            rows.append(row)
-    return rows
-
-
-def read_statuses(out: str | Path) -> Counter[str]:
-    """How many runs of a sweep's output folder have each ``status`` (one per run id).
-
-    Reads only the ``run_id`` and ``status`` columns (a run written twice, by an
-    interrupted compaction, counts once).
-
-    Raises:
-        FileNotFoundError: ``out`` holds no sweep manifest.
-    """
-    out = Path(out)
-    manifest = _manifest_of(out)
-    status: dict[str, str] = {}
-    if manifest["format"] == "parquet":
-        table = _read_parquet(out / PARQUET, ["run_id", "status"])
-        if table is not None:
-            pairs = zip(
-                table.column("run_id").to_pylist(), table.column("status").to_pylist(), strict=True
-            )
-            for run_id, value in pairs:
-                status.setdefault(run_id, value)
-    elif (out / CSV).exists():
-        with open(out / CSV, newline="", encoding="utf-8") as f:
-            for row in csv.DictReader(f):
-                status.setdefault(row["run_id"], row["status"])
-    return Counter(status.values())
-
-
 def read_manifest(out: str | Path) -> dict[str, Any] | None:
     """The manifest of a sweep output folder, or None."""
     return _read_manifest(Path(out))
@@ -422,103 +339,6 @@ def clear(out: Path) -> None:
     for name in (PARQUET, RUNS):
         if (out / name).is_dir():
             shutil.rmtree(out / name)
-
-
-def _part_files(folder: Path) -> list[Path]:
-    return sorted(p for p in folder.glob("*.parquet") if not p.name.startswith((".", "_")))
-
-
-def _read_parquet(folder: Path, columns: list[str] | None = None) -> Any:
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    parts = _part_files(folder)
-    if not parts:
-        return None
-    return pa.concat_tables([pq.read_table(p, columns=columns) for p in parts])
-
-
-def _dedup(table: Any) -> Any:
-    ids = table.column("run_id").to_pylist()
-    first: dict[str, int] = {}
-    for i, run_id in enumerate(ids):
-        first.setdefault(run_id, i)
-    if len(first) == len(ids):
-        return table
-    return table.take(sorted(first.values()))
-
-
-def _write_part(table: Any, path: Path) -> None:
-    """Write a Parquet file under a hidden temporary name, then rename it into place."""
-    import pyarrow.parquet as pq
-
-    tmp = path.with_name(f".{path.name}.tmp")
-    try:
-        pq.write_table(table, tmp)
-        _fsync(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
-def _fsync(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def _param_types(values: dict[str, list[Any]]) -> dict[str, str]:
-    """A simple column type per parameter (``float``, ``floats``, ...), else ``json``."""
-    out = {}
-    for name, vals in values.items():
-        out[name] = _simple_type(vals)
-    return out
-
-
-def _simple_type(values: list[Any]) -> str:
-    def number(v: Any) -> bool:
-        return isinstance(v, int | float) and not isinstance(v, bool)
-
-    if all(isinstance(v, bool) for v in values):
-        return "bool"
-    if all(isinstance(v, str) for v in values):
-        return "string"
-    if all(isinstance(v, int) and not isinstance(v, bool) for v in values):
-        return "int"
-    if all(number(v) for v in values):
-        return "float"
-    if all(isinstance(v, list) and all(number(x) for x in v) for v in values):
-        if all(isinstance(x, int) and not isinstance(x, bool) for v in values for x in v):
-            return "ints"
-        return "floats"
-    return "json"
-
-
-def _csv_text(value: Any, as_json: bool) -> str:
-    if as_json:
-        return json.dumps(value)
-    if value is None:
-        return ""
-    if isinstance(value, list | dict):
-        return json.dumps(value)
-    if isinstance(value, float):
-        return repr(value)
-    return str(value).replace("\r", " ").replace("\n", " ")  # one physical line per row
-
-
-def _from_csv(text: str, kind: str) -> Any:
-    if text == "":
-        return None
-    if kind == "int":
-        return int(text)
-    if kind == "float":
-        return float(text)
-    if kind == "floats":
-        return json.loads(text)
-    return text
 
 
 def _repair_csv(path: Path) -> None:

@@ -260,7 +260,7 @@ def _imports(path: Path) -> set[str]:
 
 def test_bench_imports_flow_one_way():
     for path in CLIK.rglob("*.py"):
-        if path.parts[-2] == "bench" or path == CLIK / "cli.py":
+        if path.parts[-2] == "bench" or path == CLIK / "cli.py" or path.parent == CLIK / "commands":
             continue
         bad = {m for m in _imports(path) if m == "clik.bench" or m.startswith("clik.bench.")}
         assert not bad, (path, bad)

@@ -26,7 +26,7 @@ from clik.cli import main
 from clik.constraints import ConstraintSet, Dexterity
 from clik.constraints.dexterity import dexterity_row
 from clik.errors import InputError
-from clik.loop.tracking import ReachWarning
+from clik.loop.tracker import ReachWarning
 from clik.scenarios import scenario_path
 from clik.scenarios.runner import build
 from clik.tasks.manipulability import manipulability, manipulability_along, manipulability_record

@@ -26,8 +26,8 @@ SHARED = {
     "BLOCKED_FRACTION": ("clik.loop.stop_checks", "BLOCKED_FRACTION"),
     "STABILITY_EVERY": ("clik.loop.stop_checks", "STABILITY_EVERY"),
     "JOINT_TOLERANCE": ("clik.constraints.violations", "JOINT_TOLERANCE"),
-    "STALL_PROGRESS": ("clik.solving.solve_mode", "STALL_PROGRESS"),
-    "STALL_ITERATIONS": ("clik.solving.solve_mode", "STALL_ITERATIONS"),
+    "STALL_PROGRESS": ("clik.solving.solve_problem", "STALL_PROGRESS"),
+    "STALL_ITERATIONS": ("clik.solving.solve_problem", "STALL_ITERATIONS"),
 }
 """Engine attribute -> (Python module, name) of the same number."""
 

@@ -1,4 +1,5 @@
-"""Solve mode in the compiled engine against the Python specification (clik/solving/solve_mode.py).
+"""Solve mode in the compiled engine against the Python specification (clik/solving/solve_problem.py
+and solve_mode.py).
 
 Both engines draw the same restart configurations from the same seed, so they
 take the same attempts and iterations and land on the same ``q`` up to rounding.
@@ -17,8 +18,8 @@ import pinocchio as pin
 import pytest
 
 from clik import InputError, Robot, Task, solve
-from clik.solving import solve_mode
-from clik.solving.solve_mode import _random_configurations
+from clik.solving import compiled_solve
+from clik.solving.compiled_solve import _random_configurations
 from tests.urdf_snippets import urdf_text
 
 N_TARGETS = 200
@@ -185,11 +186,11 @@ def test_bad_engine_name(planar4r):
 
 
 def test_default_engine_is_compiled(planar4r, monkeypatch):
-    import clik.solving.solve_mode as solve_mode
+    import clik.solving.compiled_solve as compiled_solve
 
     calls = []
-    real = solve_mode._compiled_engine
-    monkeypatch.setattr(solve_mode, "_compiled_engine", lambda: calls.append(1) or real())
+    real = compiled_solve._compiled_engine
+    monkeypatch.setattr(compiled_solve, "_compiled_engine", lambda: calls.append(1) or real())
     task = Task(planar4r, "tip", "position", axes=["x", "y"])
     assert solve(task, [0.5, 0.3, 0.0], q0=np.radians([10, 20, 30, 40])).success
     assert calls == [1]
@@ -202,7 +203,7 @@ def test_zero_restarts_with_failing_attempt(panda):
     assert compiled.attempts == 1 and math.isfinite(compiled.position_error)
 
 
-# ---------------------------------------------------- the kept solvers (solve_mode._SOLVERS)
+# ---------------------------------------------------- the kept solvers (compiled_solve._SOLVERS)
 
 
 def _panda_targets(panda, count, seed):
@@ -230,8 +231,8 @@ def test_a_kept_solver_forgets_the_last_solve(panda):
     for a, b, c in zip(first, again, fresh, strict=True):
         assert_identical(a, b)
         assert_identical(a, c)
-    assert len(solve_mode._SOLVERS[id(task)]) == 1
-    assert id(fresh_task) not in solve_mode._SOLVERS  # never solved with
+    assert len(compiled_solve._SOLVERS[id(task)]) == 1
+    assert id(fresh_task) not in compiled_solve._SOLVERS  # never solved with
 
 
 def test_kept_solvers_are_per_setting_and_still_checked(planar4r):
@@ -240,12 +241,12 @@ def test_kept_solvers_are_per_setting_and_still_checked(planar4r):
     for kwargs in ({"max_iterations": 3, "restarts": 0}, {}, {"mu": 0.1}, {}):
         compiled, python = both(task, [0.5, 0.3, 0.0], q0=q0, **kwargs)
         assert_same(compiled, python)
-    assert len(solve_mode._SOLVERS[id(task)]) == 3
+    assert len(compiled_solve._SOLVERS[id(task)]) == 3
     with pytest.raises(InputError, match=r"max_iterations: expected an integer >= 1, got 100\.0"):
         solve(task, [0.5, 0.3, 0.0], q0=q0, max_iterations=100.0)  # 100 is kept, 100.0 is not
-    for k in range(2 * solve_mode._SOLVERS_PER_TASK):
+    for k in range(2 * compiled_solve._SOLVERS_PER_TASK):
         solve(task, [0.5, 0.3, 0.0], q0=q0, tolerance=1e-4 * (1 + k))
-    assert len(solve_mode._SOLVERS[id(task)]) == solve_mode._SOLVERS_PER_TASK
+    assert len(compiled_solve._SOLVERS[id(task)]) == compiled_solve._SOLVERS_PER_TASK
     # an unhashable setting is used, not kept
     compiled, python = both(task, [0.5, 0.3, 0.0], q0=q0, step=np.array(0.5), max_iterations=300)
     assert_same(compiled, python)
@@ -255,10 +256,10 @@ def test_a_dropped_task_drops_its_solvers(planar4r):
     task = Task(planar4r, "tip", "position", axes=["x", "y"])
     assert solve(task, [0.5, 0.3, 0.0], q0=np.radians([10, 20, 30, 40])).success
     key = id(task)
-    assert key in solve_mode._SOLVERS
+    assert key in compiled_solve._SOLVERS
     del task
     gc.collect()
-    assert key not in solve_mode._SOLVERS
+    assert key not in compiled_solve._SOLVERS
 
 
 @pytest.mark.parametrize(

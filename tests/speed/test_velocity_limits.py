@@ -16,7 +16,7 @@ import pytest
 import clik
 from clik.cli import main
 from clik.constraints import ConstraintSet, JointLimits
-from clik.loop.tracking import Tracker
+from clik.loop.tracker import Tracker
 from clik.outputs.result import TrackingResult
 from clik.speed.speed_limits import SpeedLimits
 from clik.speed.time_scaling import running_max, running_mean, slowdown

@@ -596,7 +596,7 @@ def test_progress_bar_is_silent_off_a_terminal_or_when_disabled():
 
 @pytest.fixture(scope="module")
 def local_client():
-    from clik.sweep.execute import dask_client
+    from clik.sweep.cluster import dask_client
 
     with dask_client(workers=2) as client:
         client.wait_for_workers(2, timeout=60)
@@ -658,7 +658,7 @@ def test_workers_load_the_robot_once(tmp_path, short_sweep, local_client):
 
 
 def test_batch_size_follows_the_runs_left_and_is_bounded_in_time():
-    from clik.sweep.execute import MAX_BATCH, batch_size
+    from clik.sweep.session import MAX_BATCH, batch_size
 
     assert batch_size(120, 2, None) == 30  # a quarter of what is left, on 2 threads
     assert batch_size(10_000, 2, None) == MAX_BATCH  # no run timed yet: the worker's budget
@@ -690,14 +690,14 @@ def test_short_runs_go_in_batches_with_the_rows_of_single_runs(tmp_path, local_c
     sweep = load_sweep(path)
     batches: list[int] = []
 
-    class Counting(execute._Session):
+    class Counting(execute.SweepSession):
         def next_batch(self):
             batch = super().next_batch()
             if batch:
                 batches.append(len(batch))
             return batch
 
-    monkeypatch.setattr(execute, "_Session", Counting)
+    monkeypatch.setattr(execute, "SweepSession", Counting)
     report = run_sweep(sweep, tmp_path / "out", client=local_client, progress=False)
     assert report.complete and report.computed == 24 and sum(batches) >= 24
     assert len(batches) < 24 and max(batches) > 1, batches
@@ -713,11 +713,11 @@ def test_short_runs_go_in_batches_with_the_rows_of_single_runs(tmp_path, local_c
 def test_a_failed_batch_is_retried_run_by_run(tmp_path, short_sweep, local_client, monkeypatch):
     """A task that fails (unlike a run that raises, which is a row) fails its whole batch:
     its runs go again one per task, and only the one that fails its task is an error."""
-    from clik.sweep import execute
+    from clik.sweep import session
 
     sweep = load_sweep(short_sweep(4, 2))
     culprit = sweep.runs[5].run_id
-    monkeypatch.setattr(execute, "batch_size", lambda remaining, threads, seconds: 4)
+    monkeypatch.setattr(session, "batch_size", lambda remaining, threads, seconds: 4)
 
     def poison(run_id: str) -> None:
         from clik.sweep import worker
@@ -760,7 +760,7 @@ def test_local_workers_do_not_profile(local_client):
 
 
 def test_status_line_and_what_fails_a_sweep(tmp_path):
-    from clik.sweep.execute import FAILED_STATUSES, SweepReport, status_line
+    from clik.sweep.report import FAILED_STATUSES, SweepReport, status_line
 
     assert FAILED_STATUSES == {"violated", "velocity_limit", "diverged"}
     counts = Counter({"violated": 1, "completed": 118, "deadlock": 1})

@@ -65,7 +65,7 @@ void bind_solve(nb::module_& m) {
   m.attr("STALL_ITERATIONS") = STALL_ITERATIONS;
   nb::class_<Solver>(m, "Solver",
                      "Single-pose solves of one task with one set of settings "
-                     "(clik/solving/solve_mode.py): damped Levenberg-Marquardt on log6 for a full pose, "
+                     "(clik/solving/solve_problem.py): damped Levenberg-Marquardt on log6 for a full pose, "
                      "on the masked world-aligned error otherwise.")
       .def(
           "__init__",

@@ -1,4 +1,4 @@
-// Solve mode: see solving/solve.hpp and clik/solving/solve_mode.py (its specification).
+// Solve mode: see solving/solve.hpp and clik/solving/solve_problem.py (its specification).
 #include "solving/solve.hpp"
 
 #include <pinocchio/algorithm/frames.hpp>
@@ -14,7 +14,7 @@ namespace clik {
 
 namespace {
 
-// |v| summed in the order clik/solving/solve_mode.py's _norm3 sums it.
+// |v| summed in the order clik/solving/solve_problem.py's _norm3 sums it.
 double norm3(const Eigen::Ref<const Vec3>& v) {
   return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
 }
@@ -50,7 +50,7 @@ Vec3 fast_log3(const Mat3& R) {
   return fast_log3(R, theta);
 }
 
-// e = log6(M) and Jlog = Jlog6(M^-1) for M = (R, p), as _Problem.error takes them
+// e = log6(M) and Jlog = Jlog6(M^-1) for M = (R, p), as SolveProblem.error takes them
 // from pinocchio.log6 and pinocchio.Jlog6, with the one log3 they share computed
 // once (each of Pinocchio's functions computes its own: ~10 % of an iteration).
 // The arithmetic is Pinocchio's (log6_impl and Jlog6_impl, src/spatial/log.hxx),
@@ -185,7 +185,7 @@ bool Solver::start(const Vec3& position, const Mat3& rotation, const Eigen::Ref<
   position_ = position;
   rotation_ = rotation;
   target_se3_ = pinocchio::SE3(rotation, position);
-  // Clipped: finite limits on both sides, and no joint with nq != nv (_Problem).
+  // Clipped: finite limits on both sides, and no joint with nq != nv (SolveProblem).
   const bool one_to_one = model_.nq == model_.nv;
   clip_ = false;
   for (Eigen::Index i = 0; i < model_.nq; ++i) {
@@ -233,7 +233,7 @@ void Solver::attempt_from_q() {
   }
 }
 
-// Iterate from q_ until converged, stalled or out of iterations (_Problem.attempt).
+// Iterate from q_ until converged, stalled or out of iterations (SolveProblem.attempt).
 Solver::Attempt Solver::attempt() {
   double best = std::numeric_limits<double>::infinity();
   int since_best = 0;
@@ -259,7 +259,7 @@ Solver::Attempt Solver::attempt() {
 }
 
 // Task error e, its Jacobian J (in pose_ or masked_), and the position [m] and orientation [rad]
-// norms pos_, rot_ at q (_Problem.error).
+// norms pos_, rot_ at q (SolveProblem.error).
 void Solver::error(const Vec& q) {
   const pinocchio::FrameIndex fid = task_.frame_id;
   if (full_pose_) {
@@ -293,7 +293,7 @@ void Solver::error(const Vec& q) {
 }
 
 // Position and orientation error norms in the world frame at the last error()
-// (_Problem.world_errors).
+// (SolveProblem.world_errors).
 void Solver::world_errors(double& pos, double& rot) const {
   const pinocchio::SE3& oMf = data_.oMf[task_.frame_id];
   pos = 0.0;
@@ -305,7 +305,7 @@ void Solver::world_errors(double& pos, double& rot) const {
   }
 }
 
-// One iteration, q <- q (+) step qdot, clipped into the joint limits (_Problem.step).
+// One iteration, q <- q (+) step qdot, clipped into the joint limits (SolveProblem.step).
 void Solver::step(double err2) {
   // (10): lambda^2 = lambda_0^2 + mu |e|^2 (Levenberg-Marquardt)
   const double lambda2 = s_.damping * s_.damping + s_.mu * err2;

@@ -1,5 +1,6 @@
 // Solve mode: reach one target from q0 by iterating a law to tolerance
-// (mirrors clik/solving/solve_mode.py, its specification: _Settings, _Problem, solve).
+// (mirrors its specification: clik/solving/solve_problem.py, SolveSettings and
+// SolveProblem, and clik/solving/solve_mode.py, solve).
 //
 // The reference is held and the law iterated as a fixed-point map,
 // q <- q (+) step qdot, clipped into the joint limits:
@@ -13,7 +14,7 @@
 // of iterations gives way to the next start configuration.
 //
 // One Solver serves any number of solves of its task with its settings
-// (clik/solving/solve_mode.py keeps one per task and settings): start() begins a new
+// (clik/solving/compiled_solve.py keeps one per task and settings): start() begins a new
 // solve of a target from q0; the restarts' random configurations are drawn by
 // the caller (Python, with the seeded generator the Python engine uses) and
 // handed over as rows of `starts` to run(), which continues the same solve.
@@ -47,7 +48,7 @@ struct SolveSettings {
   int max_iterations = 100;              // per attempt
 };
 
-// The task's frame and rows (what _Problem reads from the Task).
+// The task's frame and rows (what SolveProblem reads from the Task).
 struct SolveTask {
   pinocchio::FrameIndex frame_id = 0;
   std::vector<int> rows;  // kept components of (x, y, z, rx, ry, rz), ascending

@@ -1,0 +1,88 @@
+"""``clik demo``, ``clik show``, ``clik bench`` and ``clik robots``: each hands over to one room.
+
+The case study (:mod:`clik.demo`), the live 3-D view (:mod:`clik.viz`), the
+benchmark suite (:mod:`clik.bench`) and the robots known by name
+(:class:`~clik.model.robot.Robot`); these commands only read their flags.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    """``clik demo``: the paper's case study, with its table and figures."""
+    from clik.demo import run_demo
+
+    return run_demo(
+        Path(args.out),
+        force=args.force,
+        html=not args.no_html,
+        plots=not args.no_plots,
+        quiet=args.quiet,
+    )
+
+
+def cmd_show(args: argparse.Namespace) -> int:
+    """``clik show``: the live 3-D view of a scenario or an output folder."""
+    from clik.viz import show_path
+
+    show_path(Path(args.target), block=not args.no_block)
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    """``clik bench``: the benchmark suite (``bench.json``, ``bench.md``)."""
+    from clik.bench.suite import run_bench
+
+    run_bench(Path(args.out), quick=args.quick, log=None if args.quiet else print)
+    return 0
+
+
+def cmd_robots(args: argparse.Namespace) -> int:
+    """``clik robots``: the robots known by name, and where each is found."""
+    from clik.model.robot import Robot
+
+    for name, where in Robot.available().items():
+        print(f"{name:32s} {where}")
+    return 0
+
+
+def add_demo(sub: Any) -> None:
+    """The ``clik demo`` subcommand."""
+    d = sub.add_parser("demo", help="run the paper's case study")
+    d.add_argument("--out", default="out/demo")
+    d.add_argument("--force", action="store_true")
+    d.add_argument("--no-html", action="store_true", help="skip the HTML scenes")
+    figures = d.add_mutually_exclusive_group()
+    figures.add_argument(
+        "--plots", action="store_true", help="(default) the paper's figures as PNG"
+    )
+    figures.add_argument("--no-plots", action="store_true", help="skip the figures")
+    d.add_argument("--quiet", action="store_true")
+    d.set_defaults(func=cmd_demo)
+
+
+def add_show(sub: Any) -> None:
+    """The ``clik show`` subcommand."""
+    v = sub.add_parser("show", help="open the live 3-D view of a scenario or an output folder")
+    v.add_argument("target")
+    v.add_argument("--no-block", action="store_true", help="return once the scene is shown")
+    v.set_defaults(func=cmd_show)
+
+
+def add_robots(sub: Any) -> None:
+    """The ``clik robots`` subcommand."""
+    r = sub.add_parser("robots", help="list the robots known by name")
+    r.set_defaults(func=cmd_robots)
+
+
+def add_bench(sub: Any) -> None:
+    """The ``clik bench`` subcommand."""
+    b = sub.add_parser("bench", help="run the benchmark suite (writes bench.json, bench.md)")
+    b.add_argument("--out", default="out/bench", help="output folder")
+    b.add_argument("--quick", action="store_true", help="a smoke run of a few seconds")
+    b.add_argument("--quiet", action="store_true")
+    b.set_defaults(func=cmd_bench)

@@ -1,0 +1,168 @@
+"""``clik solve``: run a scenario file, write its outputs, say how it went.
+
+Export options are checked before the run and before the output folder is
+touched; the exit code is 3 (``infeasible``) when the run failed (its outputs
+are still written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from clik.errors import EXIT_CODES, InputError
+from clik.outputs.export import FORMATS, check_exportable
+from clik.outputs.io import output_errors
+from clik.outputs.out_folder import output_folder
+from clik.outputs.result import FAILED_STATUSES, TrackingResult, write_outputs
+
+
+class ProgressBar:
+    """A run's progress on stderr (tqdm), shown only on a terminal unless ``enabled``.
+
+    Args:
+        label: Shown before the bar (the scenario's name).
+        enabled: ``None``: only when stderr is a terminal.
+    """
+
+    def __init__(self, label: str, enabled: bool | None = None) -> None:
+        self.label = label
+        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+        self.bar: tqdm | None = None
+
+    def __call__(self, k: int, n: int) -> None:
+        """Sample ``k`` of ``n`` is done (the tracker's progress callback)."""
+        if not self.enabled:
+            return
+        if self.bar is None:
+            self.bar = tqdm(total=n, desc=self.label, unit="sample", file=sys.stderr)
+        self.bar.update(k - self.bar.n)
+        if k >= n:
+            self.bar.close()
+
+
+def _number(value: float | None, spec: str) -> str:
+    """``value`` formatted with ``spec``; ``null`` for a value not finite in the summary."""
+    return "null" if value is None else format(value, spec)
+
+
+def print_summary(name: str, summary: dict) -> None:
+    """A few lines for a person."""
+    unit = "rad" if summary["info"].get("task") == "orientation" else "m"
+    print(f"{name}: {summary['status']} ({summary['reason']})")
+    print(
+        f"  steps {summary['steps']}, wall time {_number(summary['wall_time_s'], '.3f')} s, "
+        f"max tracking error {_number(summary['max_task_error'], '.3e')} {unit}, "
+        f"final {_number(summary['final_task_error'], '.3e')} {unit}"
+    )
+    if summary.get("min_obstacle_distance") is not None:
+        print(f"  min link-obstacle distance {summary['min_obstacle_distance']:.4f} m")
+    ratio = summary.get("max_velocity_ratio")
+    if ratio is not None:
+        over = ", ".join(
+            f"{v['joint']} x{v['max_ratio']:.2f} from t = {v['t_first']:.3f} s"
+            for v in summary.get("velocity", [])
+        )
+        line = f"  joint speed: max |qdot| / URDF limit {ratio:.2f}"
+        print(line + (f" (over the limit: {over})" if over else ""))
+    if summary["events"]:
+        print(
+            "  events: "
+            + ", ".join(
+                f"{e['action']} {e['constraint']} @ {e['t']:.3f}s" for e in summary["events"]
+            )
+        )
+
+
+def cmd_solve(args: argparse.Namespace) -> int:
+    """``clik solve``: run a scenario file, write its outputs; 3 when the run failed.
+
+    Export options are checked before the run and before the output folder is touched.
+    """
+    from clik.scenarios.runner import build
+
+    if args.export_every is not None and not args.export:
+        raise InputError("--export-every", "to be given with --export", args.export_every)
+    run = build(args.scenario)
+    if args.engine is not None:
+        run.tracker.engine = args.engine
+    if args.export:
+        check_exportable(run.robot.model)
+    out = Path(args.out)
+    with output_folder(out, args.force) as work:
+        result = run.execute(ProgressBar(run.scenario.name, None if not args.quiet else False))
+        with output_errors(out):
+            summary = write_outputs(result, work)
+            written = write_extras(args, result, work, run.scenario.name)
+    extras = [out / p.relative_to(work) for p in written]
+    if not args.quiet:
+        print_summary(run.scenario.name, summary)
+        print(f"  wrote {out / 'summary.json'} and {out / 'trajectory.npz'}")
+        if extras:
+            print("  and " + ", ".join(str(p) for p in extras))
+    return EXIT_CODES["infeasible"] if result.status in FAILED_STATUSES else 0
+
+
+def write_extras(
+    args: argparse.Namespace, result: TrackingResult, out: Path, name: str
+) -> list[Path]:
+    """``--export``, ``--html`` and ``--plots`` of ``clik solve``; the exported files."""
+    written: list[Path] = []
+    if args.export:
+        every = 1 if args.export_every is None else args.export_every
+        written += result.export(out, args.export, every).values()
+    if args.html:
+        from clik.viz import export_html
+
+        export_html(result, out / "scene.html")
+    if args.plots:
+        from clik.plot import save_result_plots
+
+        save_result_plots([result], out, [name])
+    return written
+
+
+def _export_every(text: str) -> int:
+    """The ``K`` of ``clik solve --export-every K``: an integer >= 1."""
+    try:
+        every = int(text)
+    except ValueError:
+        every = 0
+    if every < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return every
+
+
+def add_solve(sub: Any) -> None:
+    """The ``clik solve`` subcommand."""
+    s = sub.add_parser("solve", help="run a scenario file")
+    s.add_argument("scenario", type=Path)
+    s.add_argument("--out", required=True, help="output folder")
+    s.add_argument("--force", action="store_true", help="write into an existing output folder")
+    s.add_argument("--html", action="store_true", help="also write DIR/scene.html")
+    s.add_argument("--plots", action="store_true", help="also write PNG plots")
+    s.add_argument(
+        "--engine",
+        choices=("compiled", "python"),
+        help="compiled (default: the scenario's [solver] engine) or python (the reference loop)",
+    )
+    s.add_argument(
+        "--export",
+        nargs="+",
+        choices=FORMATS,
+        metavar="FORMAT",
+        help="also write the joint trajectory for a controller: csv (DIR/trajectory.csv), "
+        "json (DIR/trajectory.json, a ROS JointTrajectory), or both",
+    )
+    s.add_argument(
+        "--export-every",
+        type=_export_every,
+        metavar="K",
+        help="export every K-th recorded sample and the last (default 1: all)",
+    )
+    s.add_argument("--quiet", action="store_true")
+    s.set_defaults(func=cmd_solve)
