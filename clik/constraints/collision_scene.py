@@ -234,8 +234,11 @@ class CollisionScene:
         ``rho_ij`` bounds the distance from joint ``j``'s axis to any point of link ``i``'s
         geometry (configuration independent: the chain of joint offsets from ``j`` to ``i``'s
         joint plus the geometry's radius about that joint); 1 for a prismatic joint, 0 for
-        a joint that does not move link ``i``.
+        a joint that does not move link ``i``. Computed once per scene (read-only after).
         """
+        cached = getattr(self, "_rho", None)
+        if cached is not None:
+            return cached
         model = self.model
         offset = [float(np.linalg.norm(M.translation)) for M in model.jointPlacements]
         rho = np.zeros((self.n_links, model.nv))
@@ -254,6 +257,8 @@ class CollisionScene:
                 rho[i, joint.idx_v : joint.idx_v + joint.nv] = bound
                 length += offset[j]
                 j = model.parents[j]
+        rho.flags.writeable = False
+        self._rho = rho
         return rho
 
     def place_joints(self, data: pin.Data) -> np.ndarray:

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
@@ -299,12 +300,16 @@ class ConstraintSet:
         return 0.01 if pairs is None else pairs.threshold
 
     @property
-    def gains(self) -> dict[str, float | None]:
-        """Each kind's gain by kind name (None: the law's default)."""
+    def gains(self) -> Mapping[str, float | None]:
+        """Each kind's gain by kind name (None: the law's default), read-only.
+
+        A gain is the kind's own (``cset.dexterity.gain``, ``Workspace(..., gain=...)``);
+        this view only reads them, so writing into it raises instead of doing nothing.
+        """
         out: dict[str, float | None] = dict.fromkeys(("obstacle", "joint", "self", "dexterity"))
         for k in reversed(self.kinds):  # the first kind of a name wins
             out[k.name] = k.gain
-        return out
+        return MappingProxyType(out)
 
     @property
     def link_labels(self) -> list[str]:
