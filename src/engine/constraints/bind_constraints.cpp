@@ -133,6 +133,7 @@ void bind_set(nb::module_& m) {
             c.hysteresis = hysteresis;
             c.max_active = max_active;
             c.monitor_margin = monitor_margin;
+            c.built = ModelShape::of(*c.model);
             c.validate();
             new (self) ConstraintSetConfig(std::move(c));
           },
@@ -154,6 +155,7 @@ void bind_set(nb::module_& m) {
       .def_prop_ro("rho",
                    [](const ConstraintSetConfig& c) -> std::optional<Mat> {
                      if (!c.scene) return std::nullopt;
+                     c.require_unchanged();
                      return motion_bounds(*c.model, *c.scene);
                    },
                    "Motion bounds (n_links, nv) of the scene's link geometry "
@@ -161,6 +163,8 @@ void bind_set(nb::module_& m) {
       .def(
           "row_limit",
           [](const ConstraintSetConfig& c, int m_rows, const std::string& law) {
+            c.require_unchanged();
+            require(m_rows >= 1 && m_rows <= MAX_TASK_ROWS, "row_limit: m, 1 to 6 task rows");
             return c.row_limit(m_rows, law_kind(law));
           },
           nb::arg("m"), nb::arg("law"), "The bound on active rows (ConstraintSet.row_limit).");

@@ -9,6 +9,8 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/optional.h>
 
+#include "boundary.hpp"
+
 namespace clik {
 
 // A config made of a threshold and an optional gain: `name(*, threshold, gain=None)`,
@@ -24,6 +26,7 @@ void bind_threshold_config(nanobind::module_& m, const char* name, const char* d
             if (!(std::isfinite(threshold) && threshold > 0.0)) {
               throw std::invalid_argument(what + ": a positive threshold");
             }
+            require_gain(gain, what);
             new (self) Config{threshold, gain};
           },
           nb::kw_only(), nb::arg("threshold"), nb::arg("gain").none() = nb::none())

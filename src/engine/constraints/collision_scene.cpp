@@ -15,37 +15,42 @@ namespace clik {
 
 namespace {
 
-void require(bool ok, const std::string& what) {
+void scene_require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("SceneConfig: " + what);
 }
 
 }  // namespace
 
 void SceneConfig::prepare() {
-  require(gmodel != nullptr, "no GeometryModel");
+  scene_require(gmodel != nullptr, "no GeometryModel");
   const int n_geoms = static_cast<int>(gmodel->ngeoms);
   const int n_pairs = static_cast<int>(gmodel->collisionPairs.size());
-  require(n_links >= 0 && n_links <= n_geoms,
+  scene_require(n_links >= 0 && n_links <= n_geoms,
           "n_links = " + std::to_string(n_links) + " but the GeometryModel has " +
               std::to_string(n_geoms) + " geometries");
   const auto n = static_cast<std::size_t>(n_links);
-  require(link_joint.size() == n && static_cast<std::size_t>(local_radius.size()) == n &&
+  scene_require(link_joint.size() == n && static_cast<std::size_t>(local_radius.size()) == n &&
               link_labels.size() == n && obstacle_pairs.rows() == n_links,
           "link_joint, local_radius, link_labels and obstacle_pairs need one entry (row) per "
           "link geometry (n_links = " + std::to_string(n_links) + ")");
   for (int i = 0; i < obstacle_pairs.size(); ++i) {
     const int p = obstacle_pairs.data()[i];
-    require(p >= 0 && p < n_pairs, "obstacle_pairs: pair " + std::to_string(p) +
+    scene_require(p >= 0 && p < n_pairs, "obstacle_pairs: pair " + std::to_string(p) +
                                        " not among the GeometryModel's " +
                                        std::to_string(n_pairs) + " collision pairs");
   }
   for (const SelfPair& sp : self_pairs) {
-    require(sp.pair >= 0 && sp.pair < n_pairs && sp.a >= 0 && sp.a < n_links && sp.b >= 0 &&
+    scene_require(sp.pair >= 0 && sp.pair < n_pairs && sp.a >= 0 && sp.a < n_links && sp.b >= 0 &&
                 sp.b < n_links,
             "self_pairs: (pair, a, b) = (" + std::to_string(sp.pair) + ", " +
                 std::to_string(sp.a) + ", " + std::to_string(sp.b) +
                 ") not a collision pair of two link geometries");
   }
+  for (int i = 0; i < n_links; ++i) {
+    scene_require(finite_nonnegative(local_radius[i]),
+                  "local_radius: finite radii >= 0 [m], one per link geometry");
+  }
+  built = GeometryShape::of(*gmodel);
   joints.assign(link_joint.begin(), link_joint.end());
   std::sort(joints.begin(), joints.end());
   joints.erase(std::unique(joints.begin(), joints.end()), joints.end());
@@ -60,7 +65,7 @@ void SceneConfig::prepare() {
 
 void SceneConfig::check(const pinocchio::Model& model) const {
   for (int j : link_joint) {
-    require(j >= 0 && j < model.njoints,
+    scene_require(j >= 0 && j < model.njoints,
             "link_joint: joint " + std::to_string(j) + " not in the robot's model");
   }
 }

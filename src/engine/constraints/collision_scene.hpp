@@ -19,6 +19,7 @@
 #include <pinocchio/multibody/geometry.hpp>
 #include <pinocchio/multibody/model.hpp>
 
+#include "boundary.hpp"
 #include "constraints/obstacle.hpp"
 #include "types.hpp"
 
@@ -46,6 +47,7 @@ struct SceneConfig {
   std::vector<int> joints;       // joints with link geometry (sorted): bounding-sphere centres
   Vec joint_radius;              // radius of each such joint's bounding sphere [m]
   std::vector<int> link_slot;    // index in `joints` of each link geometry's joint
+  GeometryShape built;           // the GeometryModel's geometries and pairs when prepared
 
   // Sizes and indices within the GeometryModel; then joints, joint_radius and link_slot
   // from link_joint and local_radius (CollisionScene._bounding_spheres). Throws
@@ -56,6 +58,14 @@ struct SceneConfig {
   void check(const pinocchio::Model& model) const;
 
   int n_obstacles() const { return static_cast<int>(obstacle_pairs.cols()); }
+
+  // Throws unless the GeometryModel still has the geometries and pairs it had when
+  // prepared (a geometry or pair added or removed since would be read past its end).
+  void require_unchanged() const {
+    require(GeometryShape::of(*gmodel) == built,
+            "SceneConfig: the pin.GeometryModel changed after the scene was built (geometries "
+            "or collision pairs added or removed): build the ConstraintSet again");
+  }
 };
 
 // rho (n_links, nv): |pdot| <= rho_i . |qdot| for any point of link geometry i

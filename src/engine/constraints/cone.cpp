@@ -1,6 +1,8 @@
 // Tool axis cone (C1)-(C3): see cone.hpp and clik/constraints/cone.py.
 #include "constraints/cone.hpp"
 
+#include "boundary.hpp"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -92,6 +94,7 @@ void ConeConfig::bind(nanobind::module_& m) {
             if (!(std::isfinite(threshold) && threshold > 0.0 && threshold < angle)) {
               throw std::invalid_argument("ConeConfig: a threshold in (0, angle)");
             }
+            require_gain(gain, "ConeConfig");
             new (self) ConeConfig{frame, axis, direction, angle, threshold, std::move(key), gain};
           },
           nb::kw_only(), nb::arg("frame"), nb::arg("axis"), nb::arg("direction"),

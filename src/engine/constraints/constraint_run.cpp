@@ -48,6 +48,7 @@ ConstraintRun::ConstraintRun(const ConstraintSetConfig& config, const pinocchio:
   if (cfg_.model == nullptr || model.nv != cfg_.model->nv || model.nq != cfg_.model->nq) {
     throw std::invalid_argument("ConstraintRun: the model is not the constraint set's robot");
   }
+  cfg_.require_unchanged();
   limit_ = cfg_.row_limit(m, law);
   if (cfg_.scene) scene_.emplace(*cfg_.scene);
 

@@ -16,6 +16,7 @@
 
 #include <pinocchio/multibody/model.hpp>
 
+#include "boundary.hpp"
 #include "constraints/collision_scene.hpp"
 #include "constraints/kinds.hpp"
 #include "types.hpp"
@@ -34,19 +35,28 @@ struct ConstraintSetConfig {
   double hysteresis = 0.0;        // sign rule: release when e < -hysteresis * scale
   std::optional<int> max_active;  // none: the law's bound
   double monitor_margin = 0.1;    // [m]
+  ModelShape built;               // the model's sizes when validated
 
   // Each kind checked against the robot and the scene; std::invalid_argument.
   void validate() const {
     if (model == nullptr) throw std::invalid_argument("ConstraintSetConfig: no model");
-    if (!(hysteresis >= 0.0) || !(monitor_margin > 0.0) || (max_active && *max_active < 0)) {
+    if (!finite_nonnegative(hysteresis) || !finite_positive(monitor_margin) ||
+        (max_active && *max_active < 0)) {
       throw std::invalid_argument(
-          "ConstraintSetConfig: hysteresis >= 0, monitor_margin > 0 [m], max_active >= 0");
+          "ConstraintSetConfig: hysteresis finite >= 0, monitor_margin finite > 0 [m], "
+          "max_active >= 0");
     }
     if (scene) scene->check(*model);
     const SceneConfig* sc = scene ? &*scene : nullptr;
     for (const KindConfig& kind : kinds) {
       std::visit([&](const auto& k) { k.check(*model, sc); }, kind);
     }
+  }
+
+  // Throws unless the model and the scene's GeometryModel are still as validated.
+  void require_unchanged() const {
+    require_same_model(built, *model, "ConstraintSetConfig");
+    if (scene) scene->require_unchanged();
   }
 
   // The bound on active rows for a task of m rows under `law` (ConstraintSet.row_limit):

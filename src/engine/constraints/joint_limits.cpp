@@ -1,6 +1,8 @@
 // Joint-range rows (16)-(19): see joint_limits.hpp and clik/constraints/joint_limits.py.
 #include "constraints/joint_limits.hpp"
 
+#include "boundary.hpp"
+
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -26,6 +28,17 @@ void JointRangeConfig::validate() const {
         "limited joint (n = len(q_index) = " + std::to_string(n()) + "), names, row_threshold "
         "and sign one per row (2n)");
   }
+  for (Eigen::Index i = 0; i < n_; ++i) {
+    require(std::isfinite(lower[i]) && std::isfinite(upper[i]) && lower[i] < upper[i] &&
+                finite_positive(threshold[i]),
+            "JointRangeConfig: joint " + joint_names[static_cast<std::size_t>(i)] +
+                ": finite limits, lower < upper, and a finite threshold > 0");
+  }
+  for (Eigen::Index i = 0; i < 2 * n_; ++i) {
+    require(finite_positive(row_threshold[i]) && (sign[i] == 1.0 || sign[i] == -1.0),
+            "JointRangeConfig: row_threshold finite > 0 and sign +1 or -1, per row");
+  }
+  require_gain(gain, "JointRangeConfig");
 }
 
 void JointRangeConfig::check(const pinocchio::Model& model, const SceneConfig*) const {

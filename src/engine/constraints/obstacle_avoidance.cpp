@@ -2,6 +2,8 @@
 // clik/constraints/obstacle_avoidance.py (ObstacleRun: each method names its counterpart).
 #include "constraints/obstacle_avoidance.hpp"
 
+#include "boundary.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -234,6 +236,8 @@ void ObstacleRowsConfig::bind(nanobind::module_& m) {
             if (!(std::isfinite(threshold) && threshold > 0.0)) {
               throw std::invalid_argument("ObstacleConfig " + name + ": a positive threshold [m]");
             }
+            require(position.allFinite() && rotation.allFinite() && velocity.allFinite(),
+                    "ObstacleConfig " + name + ": finite position [m], rotation and velocity [m/s]");
             new (self) ObstacleConfig{std::move(name), rotation, position, velocity, threshold,
                                       geometry};
           },
@@ -255,6 +259,7 @@ void ObstacleRowsConfig::bind(nanobind::module_& m) {
           "__init__",
           [](ObstacleRowsConfig* self, std::vector<ObstacleConfig> obstacles, bool rows,
              const std::string& form, std::optional<double> gain) {
+            require_gain(gain, "ObstacleRowsConfig");
             if (form != "normalized" && form != "squared") {
               throw std::invalid_argument(
                   "ObstacleRowsConfig: form 'normalized' or 'squared', got '" + form + "'");

@@ -1,6 +1,8 @@
 // Workspace box (W1)-(W2): see workspace.hpp and clik/constraints/workspace.py.
 #include "constraints/workspace.hpp"
 
+#include "boundary.hpp"
+
 #include <stdexcept>
 
 #include <nanobind/eigen/dense.h>
@@ -79,6 +81,7 @@ void WorkspaceConfig::bind(nanobind::module_& m) {
               throw std::invalid_argument("WorkspaceConfig: a positive threshold");
             }
             if (keys.size() != 6) throw std::invalid_argument("WorkspaceConfig: six keys");
+            require_gain(gain, "WorkspaceConfig");
             new (self) WorkspaceConfig{frame, lower, upper, threshold, std::move(keys), gain};
           },
           nb::kw_only(), nb::arg("frame"), nb::arg("lower"), nb::arg("upper"),

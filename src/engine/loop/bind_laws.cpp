@@ -4,6 +4,7 @@
 #include <nanobind/stl/string.h>
 
 #include "bindings.hpp"
+#include "boundary.hpp"
 #include "loop/laws.hpp"
 
 namespace nb = nanobind;
@@ -20,6 +21,12 @@ void bind_laws(nb::module_& m) {
          double damping, double dt, double beta_max) {
         const int rows = static_cast<int>(J.rows());
         const int nv = static_cast<int>(J.cols());
+        require(rows >= 1 && nv >= 1 && e.size() == rows && K.size() == rows &&
+                    ff.size() == rows && m_rows >= 1 && m_rows <= rows &&
+                    m_rows <= MAX_TASK_ROWS,
+                "law_velocity: J (r, nv) with r, nv >= 1; e, K and ff (r,); 1 <= m <= min(r, 6)");
+        require(finite_nonnegative(damping) && finite_positive(dt) && finite_positive(beta_max),
+                "law_velocity: damping finite >= 0, dt and beta_max finite > 0");
         LawSettings s;
         s.kind = law_kind(law);
         s.damping = damping;

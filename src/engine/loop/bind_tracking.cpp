@@ -17,6 +17,7 @@
 #include <nanobind/stl/vector.h>
 
 #include "bindings.hpp"
+#include "boundary.hpp"
 #include "constraints/bind_constraints.hpp"
 #include "constraints/constraint_run.hpp"
 #include "loop/recording.hpp"
@@ -114,6 +115,9 @@ const char* stop_name(Stop s) {
 // A run and the Python objects whose memory it uses (kept alive with it).
 struct PyTrackingRun {
   nb::object model;
+  ModelShape built;   // the model's sizes when the run was built
+  long next = 0;      // the sample the next advance() starts at
+  bool stopped = false;
   In<double> times;
   RecordArrays record;
   std::unique_ptr<ConstraintRun> constraints;  // before run: it outlives the loop's use
@@ -129,10 +133,19 @@ void make_run(PyTrackingRun* self, nb::object model, const TaskConfig& task,
       record.nv() != m.nv) {
     throw std::invalid_argument("TrackingRun: t (N,) and the record's nq, nv are the model's");
   }
+  const TimesView grid(t.data(), static_cast<Eigen::Index>(t.shape(0)));
+  require(grid.allFinite(), "TrackingRun: t, finite times [s]");
+  require_window(stop.deadlock_window, law.settings.dt, "deadlock_window");
+  require_window(stop.stall_window, law.settings.dt, "stall_window");
+  for (Eigen::Index i = 0; i < law.K_task.size(); ++i) {
+    require(finite_positive(law.K_task[i]), "LawConfig: K_task, finite gains > 0 [1/s]");
+  }
   const TimesView times(t.data(), static_cast<Eigen::Index>(t.shape(0)));
   std::unique_ptr<ConstraintRun> crun;
   if (constraints) {
     const int m_rows = static_cast<int>(task.rows.size());
+    require(ModelShape::of(*constraints->model) == ModelShape::of(m),
+            "TrackingRun: the constraints are on a pin.Model of other sizes than the task's");
     crun = std::make_unique<ConstraintRun>(*constraints, m, m_rows, law.settings.kind, law.alpha,
                                            times, static_cast<int>(record.capacity()), task.frame,
                                            task.rows);
@@ -141,24 +154,42 @@ void make_run(PyTrackingRun* self, nb::object model, const TaskConfig& task,
           "LawConfig.rows: fewer than the task's and the constraints' rows");
     }
   }
+  // The extended task's room: the task's rows and at most one row per joint more.
+  require(law.rows <= static_cast<int>(task.rows.size()) + std::max(m.nv, 0),
+          "LawConfig.rows: at most the task's rows + nv");
   auto run = std::make_unique<TrackingRun>(m, task, law, stop, times, record.buffers(),
                                            std::move(joints), crun.get());
-  new (self) PyTrackingRun{std::move(model), t, record, std::move(crun), std::move(run)};
+  new (self) PyTrackingRun{std::move(model), ModelShape::of(m), 0,    false, t,
+                           record,           std::move(crun),   std::move(run)};
 }
 
 nb::tuple advance(PyTrackingRun& self, long c0, long c1, std::optional<In<double>> P_d,
                   std::optional<In<double>> R_d, In<double> FF, In<bool> at_rest,
                   Array<double> q) {
+  require_same_model(self.built, borrow_model(self.model.ptr()), "TrackingRun.advance");
+  require(!self.stopped, "advance: the run has stopped; build a new TrackingRun");
+  require(c0 == self.next && c1 >= c0 && c1 <= self.record.N,
+          "advance: c0 the next sample (" + std::to_string(self.next) + ") and c0 <= c1 <= N (" +
+              std::to_string(self.record.N) + ")");
   const auto n = static_cast<std::size_t>(c1 - c0);
   const auto m = static_cast<std::size_t>(self.run->extended().m);
-  const bool ok = c0 >= 0 && c1 >= c0 && c1 <= static_cast<long>(self.record.N) &&
-                  FF.size() >= n * m && at_rest.size() >= n && (!P_d || P_d->size() >= 3 * n) &&
-                  (!R_d || R_d->size() >= 9 * n) &&
-                  static_cast<long>(q.size()) == static_cast<long>(self.record.nq());
+  const TaskConfig& task = self.run->task();
+  auto shaped = [n](const auto& a, std::initializer_list<std::size_t> tail) {
+    if (a.ndim() != 1 + tail.size() || a.shape(0) != n) return false;
+    std::size_t d = 1;
+    for (std::size_t s : tail) {
+      if (a.shape(d++) != s) return false;
+    }
+    return true;
+  };
+  const bool ok = shaped(FF, {m}) && shaped(at_rest, {}) &&
+                  (P_d ? shaped(*P_d, {3}) : !task.has_position) &&
+                  (R_d ? shaped(*R_d, {3, 3}) : !task.has_orientation) && q.ndim() == 1 &&
+                  static_cast<long>(q.shape(0)) == static_cast<long>(self.record.nq());
   if (!ok) {
     throw std::invalid_argument(
-        "advance: samples c0 <= c1 <= N; FF (c1 - c0, m), at_rest (c1 - c0,), P_d (c1 - c0, 3) "
-        "and R_d (c1 - c0, 3, 3) or None, q (nq,)");
+        "advance: FF (c1 - c0, m), at_rest (c1 - c0,), P_d (c1 - c0, 3) (None only without "
+        "position rows), R_d (c1 - c0, 3, 3) (None only without orientation rows), q (nq,)");
   }
   Advance a;
   {
@@ -167,6 +198,8 @@ nb::tuple advance(PyTrackingRun& self, long c0, long c1, std::optional<In<double
     a = self.run->advance(c0, c1, P_d ? P_d->data() : nullptr, R_d ? R_d->data() : nullptr,
                           FF.data(), at_rest.data(), qv);
   }
+  self.next = a.next;
+  self.stopped = a.stop != Stop::none;
   return nb::make_tuple(a.next, stop_name(a.stop), a.k, a.r, a.err);
 }
 
@@ -183,7 +216,12 @@ void bind_configs(nb::module_& m) {
           "__init__",
           [](LawConfig* self, const std::string& law, double damping, double dt, double beta_max,
              const Vec& K_task, int rows, double alpha) {
-            if (!(dt > 0.0)) throw std::invalid_argument("LawConfig: dt > 0 [s]");
+            require(finite_positive(dt), "LawConfig: dt a finite time > 0 [s]");
+            require(finite_nonnegative(damping), "LawConfig: damping finite >= 0");
+            require(finite_positive(beta_max), "LawConfig: beta_max finite > 0 [1/s]");
+            require(finite_positive(alpha), "LawConfig: alpha finite > 0 [1/s]");
+            require(rows >= 1 && K_task.size() >= 1 && K_task.size() <= MAX_TASK_ROWS,
+                    "LawConfig: rows >= 1 and K_task, 1 to 6 task gains");
             new (self) LawConfig{LawSettings{law_kind(law), damping, dt, beta_max}, K_task, rows,
                                  alpha};
           },
@@ -194,9 +232,24 @@ void bind_configs(nb::module_& m) {
       .def_ro("rows", &LawConfig::rows)
       .def_ro("alpha", &LawConfig::alpha);
   nb::class_<StopConfig>(m, "StopConfig", "The stop checks' settings (clik.loop.stop_checks).")
-      .def(nb::init<double, double, double, double, double, double>(), nb::kw_only(),
-           nb::arg("deadlock_window"), nb::arg("deadlock_ratio"), nb::arg("deadlock_error"),
-           nb::arg("max_joint_step"), nb::arg("stall_window"), nb::arg("stall_progress"))
+      .def(
+          "__init__",
+          [](StopConfig* self, double deadlock_window, double deadlock_ratio,
+             double deadlock_error, double max_joint_step, double stall_window,
+             double stall_progress) {
+            // The windows are checked against dt where the run is built (require_window).
+            require(finite_positive(deadlock_window) && finite_positive(stall_window),
+                    "StopConfig: deadlock_window and stall_window finite times > 0 [s]");
+            require(finite_nonnegative(deadlock_ratio) && finite_nonnegative(deadlock_error) &&
+                        max_joint_step > 0.0 && std::isfinite(stall_progress),
+                    "StopConfig: deadlock_ratio and deadlock_error finite >= 0, max_joint_step "
+                    "> 0 [rad or m], stall_progress finite");
+            new (self) StopConfig{deadlock_window, deadlock_ratio, deadlock_error,
+                                  max_joint_step,  stall_window,   stall_progress};
+          },
+          nb::kw_only(), nb::arg("deadlock_window"), nb::arg("deadlock_ratio"),
+          nb::arg("deadlock_error"), nb::arg("max_joint_step"), nb::arg("stall_window"),
+          nb::arg("stall_progress"))
       .def_ro("deadlock_window", &StopConfig::deadlock_window)
       .def_ro("deadlock_ratio", &StopConfig::deadlock_ratio)
       .def_ro("deadlock_error", &StopConfig::deadlock_error)
@@ -214,6 +267,10 @@ void bind_configs(nb::module_& m) {
                 static_cast<Eigen::Index>(names.size()) != n) {
               throw std::invalid_argument(
                   "JointMonitorConfig: lower, upper and names need one entry per index");
+            }
+            for (Eigen::Index i = 0; i < n; ++i) {
+              require(!std::isnan(lower[i]) && !std::isnan(upper[i]) && lower[i] <= upper[i],
+                      "JointMonitorConfig: limits not NaN, lower <= upper");
             }
             new (self) JointMonitorConfig{std::move(index), lower, upper, std::move(names)};
           },

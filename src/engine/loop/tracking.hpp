@@ -73,6 +73,7 @@ class TrackingRun {
   long steps() const { return steps_; }
   long kept() const { return rec_.kept(); }
   const ExtendedTask& extended() const { return ext_; }
+  const TaskConfig& task() const { return task_; }
   const Vec& qdot() const { return qdot_; }
   const StopChecks& checks() const { return checks_; }
   const ViolationMonitor& monitor() const { return monitor_; }

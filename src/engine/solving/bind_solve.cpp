@@ -96,7 +96,7 @@ void bind_solve(nb::module_& m) {
           "start",
           [](Solver& self, const Vec3& position, const Mat3& rotation, const Vec& q0,
              nb::DRef<Vec> q) { return started(self, self.start(position, rotation, q0), q); },
-          nb::arg("position"), nb::arg("rotation"), nb::arg("q0"), nb::arg("q"),
+          nb::arg("position"), nb::arg("rotation"), nb::arg("q0"), nb::arg("q").noconvert(),
           "A new solve of the target p_d = position, R_d = rotation (placeholders where the "
           "task has no such rows), clipped to the model's limits as they are now: one attempt "
           "from q0 (nq,). Writes the configuration into q (nq,) and returns (success, "
@@ -110,7 +110,7 @@ void bind_solve(nb::module_& m) {
                 self, self.start(oMd.translation(), oMd.rotation(), q0 ? *q0 : self.reference()),
                 q);
           },
-          nb::arg("target"), nb::arg("q0").none(), nb::arg("q"),
+          nb::arg("target"), nb::arg("q0").none(), nb::arg("q").noconvert(),
           "start() with the target a pin.SE3 (read in place), from q0 or, when None, from the "
           "reference configuration.")
       .def(
@@ -119,7 +119,7 @@ void bind_solve(nb::module_& m) {
             self.run(starts);
             return outcome(self, q);
           },
-          nb::arg("starts"), nb::arg("q"),
+          nb::arg("starts"), nb::arg("q").noconvert(),
           "Continue the solve: one attempt from each row of starts (k, nq) in turn until one "
           "converges. Writes q and returns the outcome so far, as start(); q the converged or "
           "else the best attempt's configuration.");

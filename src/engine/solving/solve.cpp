@@ -147,6 +147,7 @@ void LawSystem<Rows>::solve_small() {
 Solver::Solver(const pinocchio::Model& model, const SolveTask& task, const SolveSettings& settings,
                const Vec& reference)
     : model_(model),
+      built_(ModelShape::of(model)),
       data_(model),
       task_(task),
       s_(settings),
@@ -167,6 +168,11 @@ Solver::Solver(const pinocchio::Model& model, const SolveTask& task, const Solve
       best_pos_(std::numeric_limits<double>::infinity()),
       best_rot_(std::numeric_limits<double>::infinity()) {
   if (m_ < 1 || m_ > 6) throw std::invalid_argument("rows: expected 1 to 6 task rows");
+  require(finite_positive(s_.step) && finite_nonnegative(s_.damping) &&
+              finite_nonnegative(s_.mu) && finite_positive(s_.tolerance) &&
+              finite_positive(s_.orientation_tolerance) && s_.max_iterations >= 1,
+          "Solver: step, tolerance and orientation_tolerance finite > 0, damping and mu finite "
+          ">= 0, max_iterations >= 1");
   for (int r : task_.rows) {
     if (r < 0 || r > 5) throw std::invalid_argument("rows: expected indices in 0..5");
   }
@@ -180,6 +186,7 @@ Solver::Solver(const pinocchio::Model& model, const SolveTask& task, const Solve
 }
 
 bool Solver::start(const Vec3& position, const Mat3& rotation, const Eigen::Ref<const Vec>& q0) {
+  require_same_model(built_, model_, "Solver");
   if (q0.size() != model_.nq) throw std::invalid_argument("q0: expected nq entries");
   if (!position.allFinite() || !rotation.allFinite() || !q0.allFinite()) return false;
   position_ = position;
@@ -206,7 +213,9 @@ bool Solver::start(const Vec3& position, const Mat3& rotation, const Eigen::Ref<
 }
 
 bool Solver::run(const Mat& starts) {
+  require_same_model(built_, model_, "Solver");
   if (starts.cols() != model_.nq) throw std::invalid_argument("starts: expected nq columns");
+  if (!starts.allFinite()) throw std::invalid_argument("starts: expected finite configurations");
   if (attempts_ == 0) throw std::logic_error("run: start() a solve first");
   for (Eigen::Index k = 0; k < starts.rows() && !success_; ++k) {
     q_ = starts.row(k).transpose();

@@ -29,6 +29,7 @@
 
 #include <vector>
 
+#include "boundary.hpp"
 #include "types.hpp"
 
 namespace clik {
@@ -124,6 +125,7 @@ class Solver {
   void step(double err2);
 
   const pinocchio::Model& model_;
+  ModelShape built_;  // the model's sizes when the solver was built
   pinocchio::Data data_;
   SolveTask task_;
   SolveSettings s_;
