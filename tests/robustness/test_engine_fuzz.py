@@ -114,7 +114,7 @@ def test_law_velocity_answers_any_sizes_clearly(rows, nv, sizes, m, law, numbers
     e, K, ff = (np.full(s, fill) for s in sizes)
     damping, dt, beta_max = numbers
     try:
-        qdot, blocked = E.law_velocity(law, J, e, K, ff, m, damping, dt, beta_max)
+        qdot, _blocked = E.law_velocity(law, J, e, K, ff, m, damping, dt, beta_max)
     except CLEAR:
         return
     assert qdot.shape == (nv,)
