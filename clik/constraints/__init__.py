@@ -19,8 +19,11 @@ and one C++ type; the core (:class:`ConstraintRun`) never names a kind:
 - :class:`Cone`: a frame axis kept within an angle of a direction, (C1)-(C3).
 - :func:`obstacle_row`: obstacle rows, eqs. (13)-(15), in the paper's squared form
   or the normalised one.
-- :class:`CollisionScene`: link geometry (convex) and obstacles, with pruning.
+- :class:`CollisionScene`: link geometry (convex) and obstacles, with pruning; each
+  run places it in its own :class:`~clik.constraints.collision_scene.SceneRun`.
 - :class:`ConstraintSet`: activation, release, the ``n - m`` bound (22), events.
+- :class:`~clik.constraints.read_only.ReadOnlyList`: the read-only sequences a set and
+  its kinds show (``cset.obstacles``): a set changes only through its methods.
 """
 
 from clik.constraints.collision_scene import (

@@ -9,15 +9,19 @@ Built once per robot and obstacle set (nothing is rebuilt per step):
 - every (link, obstacle) pair, and optionally (link, link) self-collision
   pairs, is a Pinocchio collision pair.
 
-Per step, :meth:`CollisionScene.place_geometries` places every geometry (one
-C++ call) when some pair may be near. Link-obstacle pairs are pruned with the
-motion bounds of :meth:`CollisionScene.motion_bounds` (distance certificates,
-kept by :class:`~clik.constraints.ConstraintSet`); link-link pairs with bounding
-spheres about each joint's origin (:meth:`CollisionScene.place_joints`).
+The scene is only read once built; each run has its own :class:`SceneRun`
+(:meth:`CollisionScene.start`: its geometry data, joint origins and moving
+obstacles), so runs on one scene, in any threads, never meet. Per step,
+:meth:`SceneRun.place_geometries` places every geometry (one C++ call) when some
+pair may be near. Link-obstacle pairs are pruned with the motion bounds of
+:meth:`CollisionScene.motion_bounds` (distance certificates, kept by
+:class:`~clik.constraints.ConstraintSet`); link-link pairs with bounding spheres
+about each joint's origin (:meth:`SceneRun.place_joints`).
 """
 
 from __future__ import annotations
 
+import copy
 import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -27,6 +31,7 @@ import numpy as np
 import pinocchio as pin
 
 from clik.constraints.obstacle import Obstacle, convex_hull
+from clik.constraints.read_only import ReadOnlyList
 from clik.errors import GeometryError, InputError
 
 if TYPE_CHECKING:
@@ -34,6 +39,13 @@ if TYPE_CHECKING:
 
 GJK_TOLERANCE = 1e-9
 """Tolerance of coal's GJK/EPA for link-obstacle and link-link distances [m]."""
+
+
+_CHANGE_OBSTACLES = "ConstraintSet.set_obstacles([...]) or ConstraintSet.move_obstacle(...)"
+"""How to change a set's obstacles (named by the error of a change in place)."""
+
+_CHANGE_SCENE = "a new ConstraintSet (its obstacles: ConstraintSet.set_obstacles([...]))"
+"""How to change a scene's link geometry."""
 
 
 class NoCollisionGeometryWarning(UserWarning):
@@ -56,12 +68,16 @@ class CollisionScene:
             than ``self_margin`` at the reference configuration are excluded).
 
     Attributes:
-        gmodel, gdata: Pinocchio geometry model and data (links first, then obstacles).
+        gmodel: Pinocchio geometry model (links first, then obstacles); only read after
+            it is built (runs place geometries in their own data, :meth:`start`).
         link_names: Link (frame) name of each link geometry.
         link_joint: Parent joint index of each link geometry.
         obstacle_pairs: Pair index of (link geometry i, obstacle o), array (n_links, n_obs).
-        self_pairs: List of (pair index, link geometry a, link geometry b).
+        self_pairs: (pair index, link geometry a, link geometry b) of each link pair.
         link_labels: Name of each link geometry in constraint names.
+
+    The sequences are read-only (:class:`~clik.constraints.read_only.ReadOnlyList`), the
+    arrays too: a scene changes only into a new scene (:meth:`moved`).
     """
 
     def __init__(
@@ -92,27 +108,24 @@ class CollisionScene:
             )
         self._bounding_spheres()
         self._add_obstacles(gmodel, obstacles)
-        self.self_pairs: list[tuple[int, int, int]] = []
-        if self_collision:
-            self._add_self_pairs(gmodel, robot, self_margin)
+        self_pairs = self._self_pairs(gmodel, robot, self_margin) if self_collision else []
+        self.self_pairs = ReadOnlyList(self_pairs, "scene.self_pairs", _CHANGE_SCENE)
         self.gmodel = gmodel
-        self.gdata = pin.GeometryData(gmodel)
-        for request in self.gdata.distanceRequests:
-            # GJK's default 1e-6 m tolerance makes hull-hull witness points jitter by that
-            # much between samples; rows are derivatives, so ask for 1e-9 m.
-            request.gjk_tolerance = GJK_TOLERANCE
-            request.epa_tolerance = GJK_TOLERANCE
-            # Warm start: GJK begins where the pair's last query ended (samples are close).
-            request.gjk_initial_guess = coal.GJKInitialGuess.CachedGuess
-        self._joint_pos = np.zeros((len(self.joints), 3))
         counts: dict[str, int] = {}
         for link in self.link_names:
             counts[link] = counts.get(link, 0) + 1
-        self.link_labels = [
-            link if counts[link] == 1 else gmodel.geometryObjects[i].name
-            for i, link in enumerate(self.link_names)
-        ]
+        self.link_labels = ReadOnlyList(
+            (
+                link if counts[link] == 1 else gmodel.geometryObjects[i].name
+                for i, link in enumerate(self.link_names)
+            ),
+            "scene.link_labels",
+            _CHANGE_SCENE,
+        )
         """Per link geometry: its link's name, or the geometry's where a link has several."""
+        for name in ("local_radius", "link_joint", "obstacle_pairs", "joint_radius", "link_slot"):
+            getattr(self, name).flags.writeable = False  # read by runs: a change is a new scene
+        self._own: SceneRun | None = None
 
     def _add_links(self, gmodel: pin.GeometryModel, links: Sequence[str] | None) -> None:
         """Each link collision geometry as a convex shape on its joint (a bad one is skipped)."""
@@ -127,7 +140,7 @@ class CollisionScene:
                     f"link names with collision geometry among {known}",
                     bad,
                 )
-        self.link_names: list[str] = []
+        link_names: list[str] = []
         self.skipped_geometries: list[str] = []
         link_joint, local_radius = [], []
         for go in source.geometryObjects:
@@ -148,10 +161,11 @@ class CollisionScene:
             gmodel.addGeometryObject(
                 pin.GeometryObject(go.name, go.parentJoint, go.parentFrame, go.placement, geometry)
             )
-            self.link_names.append(link)
+            link_names.append(link)
             link_joint.append(go.parentJoint)
             local_radius.append(float(np.linalg.norm(go.placement.translation)) + radius)
-        self.n_links = len(self.link_names)
+        self.link_names = ReadOnlyList(link_names, "scene.link_names", _CHANGE_SCENE)
+        self.n_links = len(link_names)
         self.local_radius = np.asarray(local_radius, dtype=float)
         self.link_joint = np.asarray(link_joint, dtype=np.intp)
 
@@ -187,8 +201,8 @@ class CollisionScene:
 
     def _add_obstacles(self, gmodel: pin.GeometryModel, obstacles: Sequence[Obstacle]) -> None:
         """Obstacles as geometries on the world, and one pair per (link, obstacle)."""
-        self.obstacles = list(obstacles)
-        self.obstacle_geom = []
+        self.obstacles = ReadOnlyList(obstacles, "scene.obstacles", _CHANGE_OBSTACLES)
+        self.obstacle_geom: list[int] = []
         for ob in self.obstacles:
             obj = pin.GeometryObject(f"obstacle:{ob.name}", 0, 0, ob.placement(0.0), ob.geometry)
             self.obstacle_geom.append(gmodel.addGeometryObject(obj))
@@ -199,7 +213,9 @@ class CollisionScene:
                 gmodel.addCollisionPair(pin.CollisionPair(i, g))
         self._moving = [o for o, ob in enumerate(self.obstacles) if ob.moving]
 
-    def _add_self_pairs(self, gmodel: pin.GeometryModel, robot: Robot, margin: float) -> None:
+    def _self_pairs(
+        self, gmodel: pin.GeometryModel, robot: Robot, margin: float
+    ) -> list[tuple[int, int, int]]:
         """Link-link pairs, excluding adjacent links and pairs in contact at the reference."""
         model = self.model
         parents = model.parents
@@ -207,6 +223,7 @@ class CollisionScene:
         gdata = pin.GeometryData(gmodel)
         pin.framesForwardKinematics(model, data, robot.q_reference)
         pin.updateGeometryPlacements(model, data, gmodel, gdata)
+        pairs: list[tuple[int, int, int]] = []
         for a in range(self.n_links):
             for b in range(a + 1, self.n_links):
                 ja, jb = int(self.link_joint[a]), int(self.link_joint[b])
@@ -223,8 +240,9 @@ class CollisionScene:
                 )
                 if dist <= margin:
                     continue
-                self.self_pairs.append((len(gmodel.collisionPairs), a, b))
+                pairs.append((len(gmodel.collisionPairs), a, b))
                 gmodel.addCollisionPair(pin.CollisionPair(a, b))
+        return pairs
 
     # -- per step ----------------------------------------------------------------------
 
@@ -261,31 +279,64 @@ class CollisionScene:
         self._rho = rho
         return rho
 
+    def start(self) -> SceneRun:
+        """The scene's state for one run: its own geometry data (each run has one)."""
+        moving = [(self.obstacle_geom[o], self.obstacles[o]) for o in self._moving]
+        return SceneRun(self.model, self.gmodel, self.joints, moving)
+
+    def moved(self, o: int, obstacle: Obstacle) -> CollisionScene:
+        """A new scene with ``obstacle`` (same shape, new pose or velocity) in slot ``o``.
+
+        Nothing is rebuilt: the link geometry, hulls and pairs are shared; the new scene
+        has its own ``GeometryModel`` (the geometries themselves shared), so a run that
+        started on this scene keeps it as it was.
+        """
+        out = copy.copy(self)
+        out.gmodel = self.gmodel.copy()
+        out.gmodel.geometryObjects[self.obstacle_geom[o]].placement = obstacle.placement()
+        out.obstacles = ReadOnlyList(
+            (obstacle if i == o else ob for i, ob in enumerate(self.obstacles)),
+            "scene.obstacles",
+            _CHANGE_OBSTACLES,
+        )
+        out._moving = [i for i, ob in enumerate(out.obstacles) if ob.moving]
+        out._own = None
+        return out
+
+    # -- the scene's own state, for single-threaded callers (views, tests) ---------------
+
+    def _state(self) -> SceneRun:
+        if self._own is None:
+            self._own = self.start()
+        return self._own
+
+    @property
+    def gdata(self) -> pin.GeometryData:
+        """The geometry data of :meth:`update` and :meth:`distance` (not a run's)."""
+        return self._state().gdata
+
     def place_joints(self, data: pin.Data) -> np.ndarray:
-        """Joint origins (n_joints, 3) [m] from ``data.oMi``: bounding-sphere centres."""
-        pos = self._joint_pos
-        oMi = data.oMi
-        for s, j in enumerate(self.joints):
-            pos[s] = oMi[j].translation
-        return pos
+        """Joint origins (n_joints, 3) [m] from ``data.oMi`` (see :meth:`SceneRun.place_joints`)."""
+        return self._state().place_joints(data)
 
     def place_geometries(self, data: pin.Data, t: float) -> None:
-        """Place every geometry (one C++ call) and the moving obstacles at time ``t`` [s]."""
-        for o in self._moving:
-            g = self.obstacle_geom[o]
-            self.gmodel.geometryObjects[g].placement = self.obstacles[o].placement(t)
-        pin.updateGeometryPlacements(self.model, data, self.gmodel, self.gdata)
+        """Place every geometry at ``data``'s kinematics and time ``t`` [s] (:attr:`gdata`)."""
+        self._state().place_geometries(data, t)
 
     def update(self, data: pin.Data, t: float) -> None:
-        """Joint origins and every geometry at the current kinematics and time ``t`` [s]."""
-        self.place_joints(data)
-        self.place_geometries(data, t)
+        """Joint origins and every geometry at the current kinematics and time ``t`` [s].
 
-    def replace_obstacle(self, o: int, obstacle: Obstacle) -> None:
-        """Put ``obstacle`` (same shape, new pose or velocity) in slot ``o``: no rebuild."""
-        self.obstacles[o] = obstacle
-        self.gmodel.geometryObjects[self.obstacle_geom[o]].placement = obstacle.placement()
-        self._moving = [i for i, ob in enumerate(self.obstacles) if ob.moving]
+        This and :meth:`distance` use the scene's own geometry data, one for every
+        caller: a view or a test. A run has its own (:meth:`start`), so runs on one
+        scene may share it across threads; these two may not.
+        """
+        state = self._state()
+        state.place_joints(data)
+        state.place_geometries(data, t)
+
+    def distance(self, pair: int) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+        """Signed distance of a pair, its witness points and the normal (:meth:`update`)."""
+        return self._state().distance(pair)
 
     def engine_config(self) -> Any:
         """The scene as the compiled engine's ``SceneConfig`` (the GeometryModel borrowed)."""
@@ -302,6 +353,59 @@ class CollisionScene:
             self_pairs=[(int(p), int(a), int(b)) for p, a, b in self.self_pairs],
             link_labels=list(self.link_labels),
         )
+
+
+class SceneRun:
+    """One run's state of a scene: its geometry data, joint origins, moving obstacles.
+
+    The scene's ``GeometryModel`` is only read; every placement and distance is written
+    here, so runs on one scene do not meet (the engine's ``CollisionScene`` does the
+    same, ``src/engine/constraints/collision_scene.hpp``). A moving obstacle's placement
+    at time ``t`` is written into this run's ``oMg``, not into the model.
+
+    Args:
+        model: The robot's model.
+        gmodel: The scene's geometry model (read only).
+        joints: The joints whose origins :meth:`place_joints` gives.
+        moving: ``(geometry index, obstacle)`` of each moving obstacle.
+
+    Attributes:
+        gdata: The run's geometry data (coal's requests at :data:`GJK_TOLERANCE`,
+            warm-started from each pair's last query).
+    """
+
+    def __init__(
+        self,
+        model: pin.Model,
+        gmodel: pin.GeometryModel,
+        joints: Sequence[int],
+        moving: Sequence[tuple[int, Obstacle]],
+    ) -> None:
+        self.model, self.gmodel, self.joints, self.moving = model, gmodel, joints, moving
+        self.gdata = pin.GeometryData(gmodel)
+        for request in self.gdata.distanceRequests:
+            # GJK's default 1e-6 m tolerance makes hull-hull witness points jitter by that
+            # much between samples; rows are derivatives, so ask for 1e-9 m.
+            request.gjk_tolerance = GJK_TOLERANCE
+            request.epa_tolerance = GJK_TOLERANCE
+            # Warm start: GJK begins where the pair's last query ended (samples are close).
+            request.gjk_initial_guess = coal.GJKInitialGuess.CachedGuess
+        self._joint_pos = np.zeros((len(joints), 3))
+
+    def place_joints(self, data: pin.Data) -> np.ndarray:
+        """Joint origins (n_joints, 3) [m] from ``data.oMi``: bounding-sphere centres."""
+        pos = self._joint_pos
+        oMi = data.oMi
+        for s, j in enumerate(self.joints):
+            pos[s] = oMi[j].translation
+        return pos
+
+    def place_geometries(self, data: pin.Data, t: float) -> None:
+        """Place every geometry (one C++ call) and the moving obstacles at time ``t`` [s]."""
+        pin.updateGeometryPlacements(self.model, data, self.gmodel, self.gdata)
+        oMg = self.gdata.oMg
+        for g, obstacle in self.moving:  # a world-attached geometry's oMg is its placement
+            oMg[g] = obstacle.placement(t)
 
     def distance(self, pair: int) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
         """Signed distance of a pair, its witness points (first on the link) and the normal."""

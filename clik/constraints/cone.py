@@ -119,6 +119,7 @@ class Cone(ConstraintKind):
             raise InputError(f"{where}.name", "a non-empty name", name)
         self.axis = _unit(axis, f"{where}.axis")
         self.direction = _unit(direction, f"{where}.direction")
+        self.axis.flags.writeable = self.direction.flags.writeable = False
         if not _number(angle) or not 0.0 < angle <= math.pi:
             raise InputError(f"{where}.angle", "an angle in (0, pi] [rad]", angle)
         self.angle = float(angle)

@@ -58,6 +58,13 @@ class ConstraintRun:
         n_rec: Number of recorded samples.
         frame_id: The task's frame (rows that need it: dexterity).
         task_rows: The task's rows among ``(x, y, z, rx, ry, rz)`` (idem).
+        data: The run's Pinocchio data, where the loop computes the kinematics the rows
+            read; None: a new one.
+
+    The run reads ``cset`` as it is now (its kinds, scene and settings; a change to the
+    set, such as :meth:`~clik.constraints.ConstraintSet.set_obstacles`, applies to the
+    next run) and places the scene in its own :class:`~clik.constraints.collision_scene.SceneRun`
+    (:attr:`scene`): runs on one set never share state.
 
     Raises:
         InputError: A kind that cannot run with this task (dexterity without a frame).
@@ -73,12 +80,16 @@ class ConstraintRun:
         n_rec: int,
         frame_id: int = -1,
         task_rows: np.ndarray | None = None,
+        data: pin.Data | None = None,
     ) -> None:
         self.frame_id = frame_id
         self.task_rows = np.arange(m) if task_rows is None else np.asarray(task_rows, np.intp)
-        self.cset = cset
+        self.cset = cset = cset.snapshot()
         self.robot = cset.robot
-        self.scene = cset.scene
+        self.data = cset.robot.model.createData() if data is None else data
+        self.scene = None if cset.scene is None else cset.scene.start()
+        """The run's own state of the set's collision scene (None without a scene)."""
+        self.release_rule, self.hysteresis = cset.release_rule, cset.hysteresis
         self.m = m
         self.law = law
         self.alpha = alpha
@@ -86,7 +97,7 @@ class ConstraintRun:
         self.t = t
         setup = RunSetup(
             cset.robot, m, law, t, n_rec, frame_id, self.task_rows, cset.scene,
-            cset.monitor_margin,
+            cset.monitor_margin, self.scene,
         )  # fmt: skip
         self.runs: list[KindRun] = [kind.start(setup) for kind in cset.kinds]
         self._qdot = np.zeros(self.robot.nv)
@@ -126,7 +137,10 @@ class ConstraintRun:
         if self._q_prev is not None:  # |dq| since the last sample, for the certificates
             dq = pin.difference(self.robot.model, self._q_prev, q)
             dq_abs = np.abs(dq, out=dq)
-        s = Sample(tk, q, dq_abs, self.robot, ext.J[: self.m], exact, self.active, self.scene)
+        s = Sample(
+            tk, q, dq_abs, self.robot, ext.J[: self.m], exact, self.active, self.scene,
+            self.data,
+        )  # fmt: skip
         candidates: list[Candidate] = []
         for run in self.runs:
             run.evaluate(s, candidates)
@@ -134,20 +148,20 @@ class ConstraintRun:
         self._refresh_active(tk, candidates)
         self._activate(tk, candidates)
         v = self._fill_rows(s, ext)
-        if self.cset.release_rule == "projection" and v:
+        if self.release_rule == "projection" and v:
             v = self._project_release(tk, ext, law, v)
         return v
 
     def _refresh_active(self, tk: float, candidates: list[Candidate]) -> None:
         """Refresh the active constraints' data; release those the sign rule lets go."""
         current = {c.key: c for c in candidates}
-        hysteresis = self.cset.hysteresis
+        hysteresis = self.hysteresis
         still = []
         for c in self.active:
             new = current.get(c.key)
             if new is None:  # no longer evaluated: far from its threshold
                 self._event(tk, c.key, "release")
-            elif self.cset.release_rule == "sign" and new.error < -hysteresis * new.scale:
+            elif self.release_rule == "sign" and new.error < -hysteresis * new.scale:
                 self._event(tk, c.key, "release")
             else:
                 still.append(new)

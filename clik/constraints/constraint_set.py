@@ -12,7 +12,7 @@ number of trackers and runs.
 
 from __future__ import annotations
 
-import math
+import copy
 import warnings
 from collections.abc import Mapping, Sequence
 from types import MappingProxyType
@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import numpy as np
 import pinocchio as pin
 
+from clik.bounds import in_range
 from clik.constraints.collision_scene import (
     CollisionScene,
     NoCollisionGeometryWarning,
@@ -30,8 +31,9 @@ from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits, robot_limit_rows
 from clik.constraints.kind import ConstraintKind
 from clik.constraints.link_pairs import LinkPairs
-from clik.constraints.obstacle import Obstacle
+from clik.constraints.obstacle import Obstacle, read_only_vector3
 from clik.constraints.obstacle_avoidance import ObstacleAvoidance
+from clik.constraints.read_only import ReadOnlyList
 from clik.errors import InputError
 
 if TYPE_CHECKING:
@@ -65,8 +67,9 @@ class ConstraintSet:
         release: ``"projection"`` (default) or ``"sign"``.
         hysteresis: With the sign rule, release only when the error is below
             ``-hysteresis * threshold``.
-        max_active: Bound on active rows (default and maximum: ``n - m`` under laws (9)
-            and (8), eq. (22); ``n`` under law (10), see :meth:`row_limit`).
+        max_active: Bound on active rows, an integer >= 0 (default and maximum: ``n - m``
+            under laws (9) and (8), eq. (22); ``n`` under law (10), see :meth:`row_limit`;
+            a larger one is taken as ``n``).
         monitor_margin: An obstacle's nearest distance is evaluated exactly within
             ``threshold + monitor_margin`` [m] on every sample (and on recorded samples
             everywhere); beyond it, only a lower bound is kept between recordings
@@ -78,6 +81,17 @@ class ConstraintSet:
     bring near 1 when ``alpha = 1/dt``; the default ``K = alpha / (2 max(1, |j|^2))``
     keeps the sum below 2 (a row with ``K = alpha`` makes the case study's
     explicit Euler oscillate, measured).
+
+    Sharing: a set may serve any number of trackers, runs and solves, in any threads.
+    Each run takes a :meth:`snapshot` when it starts and keeps its own state (its
+    geometry data, its rows); what the set shows (:attr:`obstacles`, the kinds' names
+    and limits) is read-only, and the set changes only through :meth:`set_obstacles`,
+    :meth:`move_obstacle` and its checked settings, each of which applies to the runs
+    that start afterwards. A robot whose model changed after loading is refused.
+
+    Raises:
+        InputError: A bad setting (the field is named), or a robot whose model changed
+            after it was loaded.
     """
 
     def __init__(
@@ -103,14 +117,12 @@ class ConstraintSet:
         max_active: int | None = None,
         monitor_margin: float = 0.1,
     ) -> None:
-        if release not in RELEASE_RULES:
-            raise InputError("constraints.release", "'projection' or 'sign'", release)
+        robot.check_model()
         for field, value in (
             ("obstacle_threshold", obstacle_threshold),
             ("self_threshold", self_threshold),
-            ("monitor_margin", monitor_margin),
         ):
-            if not (math.isfinite(value) and value > 0):
+            if not in_range(value, 0.0, strict=True):
                 raise InputError(f"constraints.{field}", "a positive distance [m]", value)
         for field, gain in (
             ("obstacle_gain", obstacle_gain),
@@ -118,7 +130,7 @@ class ConstraintSet:
             ("self_gain", self_gain),
             ("dexterity_gain", dexterity_gain),
         ):
-            if gain is not None and not (math.isfinite(gain) and gain > 0):
+            if gain is not None and not in_range(gain, 0.0, strict=True):
                 raise InputError(f"constraints.{field}", "a positive gain [1/s]", gain)
         if dexterity is not None and not isinstance(dexterity, Dexterity):
             raise InputError("constraints.dexterity", "a Dexterity(threshold=...)", dexterity)
@@ -134,8 +146,6 @@ class ConstraintSet:
                     "pairs and dexterity have their own keywords",
                     kind,
                 )
-        if not (math.isfinite(hysteresis) and hysteresis >= 0):
-            raise InputError("constraints.hysteresis", "a number >= 0", hysteresis)
         own: list[ConstraintKind] = []
         if joint_limits is not None:
             own.append(_with_gain(joint_limits, joint_gain))
@@ -164,10 +174,10 @@ class ConstraintSet:
         self.kinds: tuple[ConstraintKind, ...] = tuple(kinds)
         """The set's kinds of rows, in the order their rows are evaluated and named."""
         self.release_rule = release
-        self.hysteresis = float(hysteresis)
+        self.hysteresis = hysteresis
         self.max_active = max_active
-        self.monitor_margin = float(monitor_margin)
-        self._links = links
+        self.monitor_margin = monitor_margin
+        self._links = None if links is None else tuple(links)
         self._obstacle_kind = next(k for k in kinds if isinstance(k, ObstacleAvoidance))
         self._self_collision = any(isinstance(k, LinkPairs) for k in kinds)
         self._build_scene()
@@ -201,6 +211,73 @@ class ConstraintSet:
             )  # fmt: skip
         return out
 
+    def snapshot(self) -> ConstraintSet:
+        """The set as it is now, for one run: later changes to this set do not reach it.
+
+        A change (:meth:`set_obstacles`, :meth:`move_obstacle`, a new ``max_active``...)
+        replaces what it changes on this set, never the kinds or scene objects a
+        snapshot holds, so a copy of the set's attributes is enough.
+
+        Raises:
+            InputError: The robot's model changed since the set was built.
+        """
+        self.robot.check_model(full=False)  # the whole model: at the set, tracker, solve
+        return copy.copy(self)
+
+    # -- settings, checked when set --------------------------------------------------------
+
+    @property
+    def release_rule(self) -> str:
+        """``"projection"`` or ``"sign"`` (:data:`RELEASE_RULES`)."""
+        return self._release_rule
+
+    @release_rule.setter
+    def release_rule(self, value: str) -> None:
+        if value not in RELEASE_RULES:
+            raise InputError("constraints.release", "'projection' or 'sign'", value)
+        self._release_rule = value
+
+    @property
+    def hysteresis(self) -> float:
+        """The sign rule's hysteresis, a fraction of the threshold (>= 0)."""
+        return self._hysteresis
+
+    @hysteresis.setter
+    def hysteresis(self, value: float) -> None:
+        if not in_range(value, 0.0):
+            raise InputError("constraints.hysteresis", "a number >= 0", value)
+        self._hysteresis = float(value)
+
+    @property
+    def max_active(self) -> int | None:
+        """The bound on active rows given (None: the law's, :meth:`row_limit`).
+
+        An integer >= 0; one above the robot's ``nv`` is taken as ``nv`` (no more rows can
+        hold at once), so the engine never sees a count beyond the robot's.
+        """
+        return self._max_active
+
+    @max_active.setter
+    def max_active(self, value: int | None) -> None:
+        if value is not None and (
+            isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0
+        ):
+            raise InputError(
+                "constraints.max_active", "an integer >= 0 or None (the law's bound)", value
+            )
+        self._max_active = None if value is None else min(int(value), self.robot.nv)
+
+    @property
+    def monitor_margin(self) -> float:
+        """Distance beyond a threshold still evaluated exactly [m] (> 0)."""
+        return self._monitor_margin
+
+    @monitor_margin.setter
+    def monitor_margin(self, value: float) -> None:
+        if not in_range(value, 0.0, strict=True):
+            raise InputError("constraints.monitor_margin", "a positive distance [m]", value)
+        self._monitor_margin = float(value)
+
     def fingerprint(self) -> tuple[Any, ...]:
         """What a prepared solve depends on: a set changed since is prepared again."""
         return (
@@ -214,6 +291,9 @@ class ConstraintSet:
         """Replace the obstacles (add, remove) between runs, keeping the robot as loaded.
 
         The link hulls are computed once per robot; only the collision pairs are rebuilt.
+        A run takes the obstacles as they are when it starts (both engines): a change
+        made during a run (from its ``progress`` callback, or another thread) applies to
+        the next run.
         """
         old = self._obstacle_kind
         new = ObstacleAvoidance(obstacles, old.rows, old.threshold, old.form, old.gain)
@@ -228,7 +308,14 @@ class ConstraintSet:
         rpy: Sequence[float] | None = None,
         velocity: Sequence[float] | None = None,
     ) -> None:
-        """Move an obstacle between runs (no rebuild): new position [m], rpy [rad], velocity."""
+        """Move an obstacle between runs (no rebuild): new position [m], rpy [rad], velocity.
+
+        As :meth:`set_obstacles`, a run takes the obstacles as they are when it starts:
+        a move during a run applies to the next run.
+
+        Raises:
+            InputError: An unknown name, or not three finite numbers.
+        """
         names = [o.name for o in self.obstacles]
         if name not in names:
             raise InputError("obstacle", f"one of {names}", name)
@@ -236,17 +323,17 @@ class ConstraintSet:
         ob = self.obstacles[i]
         moved = Obstacle.__new__(Obstacle)
         moved.__dict__.update(ob.__dict__)
-        moved.position = np.array(position, dtype=float)
-        if moved.position.shape != (3,) or not np.all(np.isfinite(moved.position)):
-            raise InputError(f"obstacles.{name}.position", "three finite numbers", position)
+        for key, value in (("position", position), ("rpy", rpy), ("velocity", velocity)):
+            if value is not None:
+                setattr(moved, key, read_only_vector3(value, f"obstacles.{name}.{key}"))
         if rpy is not None:
-            moved.rpy = np.array(rpy, dtype=float)
             moved.rotation = pin.rpy.rpyToMatrix(*moved.rpy)
-        if velocity is not None:
-            moved.velocity = np.array(velocity, dtype=float)
-        self._obstacle_kind.moved(i, moved)
+            moved.rotation.flags.writeable = False
+        kind = self._obstacle_kind.moved(i, moved)
         assert self.scene is not None
-        self.scene.replace_obstacle(i, moved)
+        self.scene = self.scene.moved(i, moved)
+        self.kinds = tuple(kind if k is self._obstacle_kind else k for k in self.kinds)
+        self._obstacle_kind = kind
 
     # -- what the kinds say, read whole ----------------------------------------------------
 
@@ -254,8 +341,12 @@ class ConstraintSet:
         return next((k for k in self.kinds if isinstance(k, cls)), None)
 
     @property
-    def obstacles(self) -> list[Obstacle]:
-        """The obstacles (always monitored); change them with :meth:`set_obstacles`."""
+    def obstacles(self) -> ReadOnlyList[Obstacle]:
+        """The obstacles (always monitored), read-only.
+
+        Change them with :meth:`set_obstacles` or :meth:`move_obstacle`: a change in place
+        (``append``, item assignment...) raises an :class:`~clik.errors.InputError`.
+        """
         return self._obstacle_kind.obstacles
 
     @property

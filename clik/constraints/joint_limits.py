@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clik.bounds import in_range, real
 from clik.constraints.kind import (
     CHECK_TOLERANCE,
     Candidate,
@@ -32,6 +33,7 @@ from clik.constraints.kind import (
     Sample,
     Violation,
 )
+from clik.constraints.read_only import ReadOnlyList
 from clik.errors import InputError, JointNotFound
 from clik.model.joints import CONTINUOUS, PRISMATIC, REVOLUTE, joint_kind
 
@@ -153,14 +155,10 @@ class JointLimits(ConstraintKind):
         if bad:
             raise InputError("constraints.joint_limits", "lower <= upper for every joint", bad)
         thr_q = _thresholds(threshold, nq)
-        if prismatic_threshold is not None:
-            p_thr = float(prismatic_threshold)
-            if not (math.isfinite(p_thr) and p_thr > 0):
-                raise InputError(
-                    "constraints.joint_limits.prismatic_threshold",
-                    "a positive length [m]",
-                    prismatic_threshold,
-                )
+        p_thr = None if prismatic_threshold is None else real(prismatic_threshold)
+        if p_thr is not None and not in_range(p_thr, 0.0, strict=True):
+            field = "constraints.joint_limits.prismatic_threshold"
+            raise InputError(field, "a positive length [m]", prismatic_threshold)
         limited = [
             (name, joint)
             for name, joint in one_dof
@@ -177,7 +175,7 @@ class JointLimits(ConstraintKind):
         self.lower = lower[self.q_index]
         self.upper = upper[self.q_index]
         thr = thr_q[self.q_index]
-        if prismatic_threshold is not None:
+        if p_thr is not None:
             thr[[k == PRISMATIC for k in self.kinds]] = p_thr
         self._check_usable(thr, model, prismatic=prismatic_threshold is not None)
         self.threshold = np.minimum(thr, RANGE_FRACTION * (self.upper - self.lower))
@@ -188,6 +186,16 @@ class JointLimits(ConstraintKind):
         self.row_threshold = np.concatenate([self.threshold, self.threshold])
         self._thr = self.row_threshold
         self.sign = np.concatenate([np.ones(n), -np.ones(n)])
+        self._freeze()
+
+    def _freeze(self) -> None:
+        """The limits and names, read-only: what both engines' rows are built on."""
+        change = "a new JointLimits(robot, ...)"
+        for name in ("joint_names", "kinds", "units", "names"):
+            setattr(self, name, ReadOnlyList(getattr(self, name), f"JointLimits.{name}", change))
+        for name in ("q_index", "v_index", "lower", "upper", "threshold", "_bound", "sign"):
+            getattr(self, name).flags.writeable = False
+        self.row_threshold.flags.writeable = False  # also _thr
 
     name = "joint"
     covers_robot_limits = True

@@ -29,12 +29,14 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol, TypeVar
 
 import numpy as np
 
+from clik.bounds import in_range, real
+from clik.errors import InputError
 from clik.schema import MAX_GAIN_DT, Table
 
 if TYPE_CHECKING:
     import pinocchio as pin
 
-    from clik.constraints.collision_scene import CollisionScene
+    from clik.constraints.collision_scene import CollisionScene, SceneRun
     from clik.constraints.violations import ViolationMonitor
     from clik.model.robot import Robot
     from clik.outputs.result import TrackingResult
@@ -122,6 +124,7 @@ class RunSetup:
         task_rows: The task's rows among ``(x, y, z, rx, ry, rz)``.
         scene: The set's collision scene (link geometry, obstacles), or None.
         monitor_margin: Distance beyond a threshold still evaluated exactly [m].
+        geometry: The run's own state of ``scene`` (placements, distances), or None.
     """
 
     robot: Robot
@@ -133,6 +136,7 @@ class RunSetup:
     task_rows: np.ndarray
     scene: CollisionScene | None
     monitor_margin: float
+    geometry: SceneRun | None = None
 
     @property
     def dt(self) -> float:
@@ -147,7 +151,7 @@ class Sample:
         tk: The sample's time [s].
         q: Configuration (kinematics and joint Jacobians computed at it).
         dq_abs: ``|dq|`` since the previous sample (nv,), or None at the first.
-        model, data: The robot's model and data.
+        model, data: The robot's model and the run's data (kinematics at ``q``).
         J_task: The task rows of ``J_e`` (m, nv), eq. (3).
         exact: This sample is recorded (distances are made exact).
         active: The active constraints, in row order.
@@ -177,17 +181,19 @@ class Sample:
         J_task: np.ndarray,
         exact: bool,
         active: list[Candidate],
-        scene: CollisionScene | None,
+        scene: SceneRun | None,
+        data: pin.Data | None = None,
     ) -> None:
         self.tk, self.q, self.dq_abs, self.exact = tk, q, dq_abs, exact
-        self.model, self.data = robot.model, robot.data
+        self.model = robot.model
+        self.data = robot.data if data is None else data
         self.J_task = J_task
         self.active = active
         self.active_keys = {c.key for c in active}
         self._scene, self._placed = scene, False
 
     def place_geometries(self) -> None:
-        """Place the collision scene's geometry at this sample (once, for every kind)."""
+        """Place the run's scene geometry at this sample (once, for every kind)."""
         if not self._placed and self._scene is not None:
             self._scene.place_geometries(self.data, self.tk)
             self._placed = True
@@ -246,7 +252,16 @@ class ConstraintKind(ABC):
 
     name: ClassVar[str]
     table: ClassVar[str | None] = None
-    gain: float | None = None
+    _gain: float | None = None
+
+    @property
+    def gain(self) -> float | None:
+        """The rows' gain [1/s]; None: the law's default."""
+        return self._gain
+
+    @gain.setter
+    def gain(self, value: float | None) -> None:
+        self._gain = checked_gain(value, f"{type(self).__name__}.gain")
 
     @classmethod
     def read_table(cls, table: Table, dt: float) -> dict[str, Any]:
@@ -264,7 +279,8 @@ class ConstraintKind(ABC):
     def replaced(self: K, **changes: Any) -> K:
         """A copy with some attributes changed (``threshold=...``, ``gain=...``)."""
         out = copy.copy(self)
-        out.__dict__.update(changes)
+        for name, value in changes.items():
+            setattr(out, name, value)
         return out
 
     @property
@@ -304,6 +320,19 @@ class ConstraintKind(ABC):
     def fingerprint(self) -> tuple[Any, ...]:
         """What a prepared solve depends on (a changed kind is prepared again)."""
         return (id(self), self.gain)
+
+
+def checked_gain(value: object, field: str) -> float | None:
+    """A row gain as given: None (the law's default) or a positive finite number [1/s].
+
+    Raises:
+        InputError: Anything else, naming ``field``.
+    """
+    if value is None:
+        return None
+    if not in_range(value, 0.0, strict=True):
+        raise InputError(field, "a positive finite gain [1/s] or None", value)
+    return real(value)
 
 
 def read_gain(table: Table, dt: float) -> float | None:

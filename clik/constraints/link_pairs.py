@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import pinocchio as pin
 
 from clik.constraints.kind import (
     CHECK_TOLERANCE,
@@ -31,6 +32,7 @@ if TYPE_CHECKING:
 
 
 _STILL = np.zeros(3)
+_STILL.flags.writeable = False  # a link pair's "obstacle" is at rest: read by every run
 
 
 class LinkPairs(ConstraintKind):
@@ -95,6 +97,8 @@ class LinkPairRun(KindRun):
         super().__init__(kind)
         self.kind: LinkPairs = kind
         self.scene = setup.scene
+        self.geometry = setup.geometry
+        self._local = pin.SE3.Identity()  # a witness point in its joint's frame (row)
         self.reach = kind.threshold + setup.monitor_margin
         self.penetrations: list[tuple[str, float]] = []
         self._pairs: dict[int, tuple[float, np.ndarray, np.ndarray, np.ndarray]] = {}
@@ -110,10 +114,10 @@ class LinkPairRun(KindRun):
 
     def evaluate(self, s: Sample, out: list[Candidate]) -> None:
         """Pairs whose bounding spheres are near, with coal."""
-        scene = self.scene
-        if not self.n or scene is None:
+        scene, geometry = self.scene, self.geometry
+        if not self.n or scene is None or geometry is None:
             return
-        pos, r = scene.place_joints(s.data), scene.joint_radius
+        pos, r = geometry.place_joints(s.data), scene.joint_radius
         a, b = self.slots
         gap = np.linalg.norm(pos[a] - pos[b], axis=1) - r[a] - r[b]
         close = np.flatnonzero(gap < self.reach)
@@ -123,7 +127,7 @@ class LinkPairRun(KindRun):
         thr = self.kind.threshold
         for idx in close:
             pair = scene.self_pairs[idx][0]
-            dist, pa, pb, normal = scene.distance(pair)
+            dist, pa, pb, normal = geometry.distance(pair)
             key = self.names[idx]
             if dist < 0.0:
                 self.penetrations.append((key, float(dist)))
@@ -139,8 +143,8 @@ class LinkPairRun(KindRun):
         assert scene is not None
         dist, pa, pb, normal = self._pairs[c.item]
         _, ia, ib = scene.self_pairs[c.item]
-        Jp = point_jacobian(s.model, s.data, int(scene.link_joint[ia]), pa)
-        Jp = Jp - point_jacobian(s.model, s.data, int(scene.link_joint[ib]), pb)
+        Jp = point_jacobian(s.model, s.data, int(scene.link_joint[ia]), pa, self._local)
+        Jp = Jp - point_jacobian(s.model, s.data, int(scene.link_joint[ib]), pb, self._local)
         c.error, c.feed = obstacle_row(
             "normalized", c.threshold, dist, pa, pb, normal, Jp, _STILL, out
         )

@@ -34,11 +34,18 @@ SHAPES = ("sphere", "box", "capsule", "cylinder", "mesh")
 
 def _vector3(value: Sequence[float] | np.ndarray, field: str) -> np.ndarray:
     try:
-        arr = np.asarray(value, dtype=float).reshape(-1)
+        arr = np.array(value, dtype=float).reshape(-1)  # a copy: the caller keeps theirs
     except (TypeError, ValueError):
         raise InputError(field, "three finite numbers", value) from None
     if arr.shape != (3,) or not np.all(np.isfinite(arr)):
         raise InputError(field, "three finite numbers", value)
+    return arr
+
+
+def read_only_vector3(value: Sequence[float] | np.ndarray, field: str) -> np.ndarray:
+    """Three finite numbers as a new read-only array (an obstacle's position, rpy...)."""
+    arr = _vector3(value, field)
+    arr.flags.writeable = False
     return arr
 
 
@@ -114,6 +121,8 @@ class Obstacle:
                 )
         self.threshold = None if threshold is None else float(threshold)
         self.rotation = pin.rpy.rpyToMatrix(*self.rpy)
+        for array in (self.position, self.rpy, self.velocity, self.rotation):
+            array.flags.writeable = False  # a set's scene is built on them: change by a copy
         self.params: dict[str, object] = {}
         where = f"obstacles.{name}"
         if shape == "sphere":

@@ -24,6 +24,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import pinocchio as pin
 
 from clik.constraints.kind import (
     CHECK_TOLERANCE,
@@ -37,6 +38,7 @@ from clik.constraints.kind import (
 )
 from clik.constraints.obstacle import Obstacle
 from clik.constraints.obstacle_rows import FORMS, obstacle_error, obstacle_row, point_jacobian
+from clik.constraints.read_only import ReadOnlyList
 from clik.errors import InputError
 
 if TYPE_CHECKING:
@@ -68,10 +70,17 @@ class ObstacleAvoidance(ConstraintKind):
     ) -> None:
         if form not in FORMS:
             raise InputError("constraints.obstacles.form", "'normalized' or 'squared'", form)
+        for i, o in enumerate(obstacles):
+            if not isinstance(o, Obstacle):
+                raise InputError(f"obstacles[{i}]", "an Obstacle(name, shape, position, ...)", o)
         names = [o.name for o in obstacles]
         if len(set(names)) != len(names):
             raise InputError("obstacles", "distinct obstacle names", names)
-        self.obstacles = list(obstacles)
+        self.obstacles = ReadOnlyList(
+            obstacles,
+            "obstacles",
+            "ConstraintSet.set_obstacles([...]) or ConstraintSet.move_obstacle(...)",
+        )
         self.rows = bool(rows)
         self.threshold = float(threshold)
         self.form = form
@@ -82,6 +91,7 @@ class ObstacleAvoidance(ConstraintKind):
         """``d_o`` per obstacle [m]."""
         self.velocities = np.array([o.velocity for o in self.obstacles]).reshape(-1, 3)
         """``cdot`` per obstacle (n_obs, 3) [m/s]."""
+        self.thresholds.flags.writeable = self.velocities.flags.writeable = False
 
     @property
     def wants_rows(self) -> bool:
@@ -111,10 +121,10 @@ class ObstacleAvoidance(ConstraintKind):
             obstacles=configs, rows=self.rows, form=self.form, gain=self.gain
         )
 
-    def moved(self, i: int, obstacle: Obstacle) -> None:
-        """Obstacle ``i`` replaced by ``obstacle`` (same shape, new pose or velocity)."""
-        self.obstacles[i] = obstacle
-        self.velocities[i] = obstacle.velocity
+    def moved(self, i: int, obstacle: Obstacle) -> ObstacleAvoidance:
+        """A new kind with obstacle ``i`` replaced by ``obstacle`` (this one is unchanged)."""
+        obstacles = [obstacle if k == i else o for k, o in enumerate(self.obstacles)]
+        return ObstacleAvoidance(obstacles, self.rows, self.threshold, self.form, self.gain)
 
     def info(self) -> list[dict[str, Any]]:
         """Each obstacle as a run's ``info["obstacles"]`` lists it (threshold included)."""
@@ -217,6 +227,7 @@ class ObstacleRun(KindRun):
         self.kind: ObstacleAvoidance = kind
         n_obs = len(kind.obstacles)
         self.scene = setup.scene
+        self.geometry = setup.geometry
         self.n_obs = n_obs
         n_rec = setup.n_rec
         self.dist_o = np.full(n_obs, np.inf)
@@ -227,6 +238,7 @@ class ObstacleRun(KindRun):
         self.run_min_t = np.zeros(n_obs)
         self.rec_dist = np.full((n_rec, n_obs), np.inf)
         self.rec_link = np.full((n_rec, n_obs), -1, dtype=np.int16)
+        self._local = pin.SE3.Identity()  # a witness point in its joint's frame (row)
         scene = self.scene
         if scene is None or not n_obs:
             return
@@ -289,9 +301,9 @@ class ObstacleRun(KindRun):
 
     def _candidate(self, i: int, o: int) -> Candidate:
         """Distance, witness points and error of link geometry ``i`` and obstacle ``o``."""
-        scene = self.scene
-        assert scene is not None
-        dist, p_link, p_obs, normal = scene.distance(int(scene.obstacle_pairs[i, o]))
+        scene, geometry = self.scene, self.geometry
+        assert scene is not None and geometry is not None
+        dist, p_link, p_obs, normal = geometry.distance(int(scene.obstacle_pairs[i, o]))
         thr = float(self.kind.thresholds[o])
         error, scale = obstacle_error(self.kind.form, thr, dist)
         item = i * self.n_obs + o
@@ -303,7 +315,7 @@ class ObstacleRun(KindRun):
     def row(self, s: Sample, c: Candidate, out: np.ndarray) -> None:
         """Row (15) and feed-forward (14) of a link-obstacle pair."""
         dist, p_link, p_obs, normal, joint = self._pairs[c.item]
-        Jp = point_jacobian(s.model, s.data, joint, p_link)
+        Jp = point_jacobian(s.model, s.data, joint, p_link, self._local)
         velocity = self.kind.velocities[c.item % self.n_obs]
         c.error, c.feed = obstacle_row(
             self.kind.form, c.threshold, dist, p_link, p_obs, normal, Jp, velocity, out

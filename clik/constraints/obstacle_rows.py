@@ -32,17 +32,28 @@ MIN_WITNESS_GAP = 1e-12
 """Witness points closer than this [m] give no direction of their own."""
 
 
-def point_jacobian(model: pin.Model, data: pin.Data, joint: int, point: np.ndarray) -> np.ndarray:
+def point_jacobian(
+    model: pin.Model,
+    data: pin.Data,
+    joint: int,
+    point: np.ndarray,
+    local: pin.SE3 | None = None,
+) -> np.ndarray:
     """Linear Jacobian (3, nv) of a point fixed on joint ``joint``'s body, world-aligned.
 
     Needs ``computeJointJacobians`` at the current configuration.
+
+    Args:
+        model: The robot's model.
+        data: The data holding the kinematics.
+        joint: The joint whose body carries the point.
+        point: The point in the world frame [m].
+        local: An ``SE3`` this call may overwrite with the point's placement in the
+            joint's frame (a run keeps one: building an ``SE3`` costs 2-3 us); None: a new one.
     """
-    _LOCAL.translation = data.oMi[joint].actInv(point)
-    return pin.getFrameJacobian(model, data, joint, _LOCAL, pin.LOCAL_WORLD_ALIGNED)[:3]
-
-
-_LOCAL = pin.SE3.Identity()
-"""The point's placement in its joint frame, reused (building an SE3 costs 2-3 us)."""
+    placement = pin.SE3.Identity() if local is None else local
+    placement.translation = data.oMi[joint].actInv(point)
+    return pin.getFrameJacobian(model, data, joint, placement, pin.LOCAL_WORLD_ALIGNED)[:3]
 
 
 def obstacle_row(

@@ -34,6 +34,7 @@ from clik.constraints.kind import (
     Violation,
     read_gain,
 )
+from clik.constraints.read_only import ReadOnlyList
 from clik.errors import InputError
 from clik.schema import MAX_LENGTH, Table
 
@@ -99,6 +100,7 @@ class Workspace(ConstraintKind):
             raise InputError(f"{where}.name", "a non-empty name", name)
         self.lower = _vector3(lower, f"{where}.lower")
         self.upper = _vector3(upper, f"{where}.upper")
+        self.lower.flags.writeable = self.upper.flags.writeable = False
         if not np.all(self.lower < self.upper):
             raise InputError(
                 f"{where}.upper", f"a corner above lower = {self.lower.tolist()} on every axis",
@@ -118,7 +120,11 @@ class Workspace(ConstraintKind):
         if gain is not None and not (math.isfinite(gain) and gain > 0):
             raise InputError(f"{where}.gain", "a positive gain [1/s]", gain)
         self.gain = gain
-        self.keys = [f"workspace:{self.label}:{a}:{s}" for s in SIDES for a in AXES]
+        self.keys = ReadOnlyList(
+            (f"workspace:{self.label}:{a}:{s}" for s in SIDES for a in AXES),
+            "Workspace.keys",
+            "a new Workspace(...)",
+        )
         """The six walls' keys: lower x, y, z, then upper x, y, z."""
 
     @classmethod

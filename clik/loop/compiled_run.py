@@ -36,6 +36,7 @@ class RunState(Protocol):
     robot: Robot
     task: Task
     tr: Any
+    cset: ConstraintSet | None
     t: np.ndarray
     N: int
     chunks: ReferenceChunks
@@ -87,8 +88,8 @@ def compiled_samples(run: RunState, q: np.ndarray) -> tuple[str, str]:
         record = ViolationRecord(constraint, kind, t_first, worst)
         record.t_last = t_last
         run.monitor.records[constraint] = record
-    if run.tr.constraints is not None:
-        run.crun = CompiledConstraints(run.tr.constraints, native.constraint_records())
+    if run.cset is not None:
+        run.crun = CompiledConstraints(run.cset, native.constraint_records())
     if not stop[1]:
         return "completed", f"reached the end of the trajectory at t = {run.t[-1]:.6g} s"
     return _stopped(run, native, stop)
@@ -110,7 +111,7 @@ def _engine_run(run: RunState) -> Any:
         t=run.t,
         record=_record_arrays(engine, run.rec),
         joints=_joint_monitor_config(engine, run.monitor.joints),
-        constraints=None if tr.constraints is None else tr.constraints.engine_config(),
+        constraints=None if run.cset is None else run.cset.engine_config(),
     )
 
 

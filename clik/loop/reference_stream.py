@@ -16,6 +16,7 @@ import numpy as np
 from clik.errors import InputError
 from clik.tasks.task import Task
 from clik.trajectory import Reference, Trajectory
+from clik.trajectory.reference import TRAILING_SHAPES
 
 REFERENCE_CHUNK = 4096
 """Samples per chunk of reference."""
@@ -41,6 +42,33 @@ def task_reference(
     if task.has_orientation:
         V6[:, 3:] = ref.angular_velocity
     return P_d, R_d, np.ascontiguousarray(V6[:, task.rows])
+
+
+def checked_sample(ref: object, n: int) -> Reference:
+    """What a trajectory's ``sample`` gave for ``n`` times, checked: a Reference of ``n``.
+
+    A :class:`~clik.trajectory.Reference` checks its own arrays against its times when
+    it is built; here its number of samples and its arrays' shapes are checked against
+    the ``n`` asked for (the loop, and the engine, read ``n`` rows of each).
+
+    Raises:
+        InputError: Not a Reference, or not ``n`` samples (``trajectory.sample``), or an
+            array of another shape (``trajectory.<array>``).
+    """
+    if not isinstance(ref, Reference):
+        raise InputError(
+            "trajectory.sample", "a clik.trajectory.Reference from sample(t)", type(ref).__name__
+        )
+    if ref.t.shape != (n,):
+        raise InputError(
+            "trajectory.sample", f"a Reference of the {n} samples asked for", f"{len(ref)}"
+        )
+    for name, trailing in TRAILING_SHAPES.items():
+        array = getattr(ref, name)
+        if array is not None and np.shape(array) != (n, *trailing):
+            expected = f"shape {(n, *trailing)} for {n} samples"
+            raise InputError(f"trajectory.{name}", expected, f"shape {np.shape(array)}")
+    return ref
 
 
 class ReferenceChunks:
@@ -77,7 +105,8 @@ class ReferenceChunks:
 
     def _sample(self, c0: int) -> Chunk:
         c1 = min(c0 + self.size, self.t.shape[0])
-        P_d, R_d, FF = task_reference(self.task, self.trajectory.sample(self.t[c0:c1]))
+        ref = checked_sample(self.trajectory.sample(self.t[c0:c1]), c1 - c0)
+        P_d, R_d, FF = task_reference(self.task, ref)
         at_rest = ~np.any(FF != 0.0, axis=1)
         if self.center is not None and P_d is not None:
             dist = np.linalg.norm(P_d - self.center, axis=1)

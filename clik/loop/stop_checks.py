@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from clik.bounds import MAX_STEPS, in_range, real
+from clik.errors import InputError
 from clik.loop.gains import stability_margin
 from clik.tasks.extended_task import ExtendedTask
 
@@ -32,15 +34,20 @@ STABILITY_EVERY = 10
 
 @dataclass
 class StopSettings:
-    """Thresholds of the stop checks (see the module docstring).
+    """Thresholds of the stop checks (see the module docstring), in their ranges.
 
     Attributes:
-        deadlock_window: Time [s] a deadlock condition must hold before stopping.
-        deadlock_ratio: Laws (9), (8): ``|J_e^T K e_e| <= ratio |J_e|_F |K e_e|``.
-        deadlock_error: Task error [m or rad] below which no deadlock is declared.
-        max_joint_step: A joint step above this [rad or m] is divergence.
-        stall_window: Time [s] over which an error at rest must fall.
-        stall_progress: Fraction it must fall by.
+        deadlock_window: Time [s] a deadlock condition must hold before stopping, > 0 and
+            at most :data:`~clik.bounds.MAX_STEPS` samples.
+        deadlock_ratio: Laws (9), (8): ``|J_e^T K e_e| <= ratio |J_e|_F |K e_e|``, in
+            [0, 1] (the ratio of those norms never exceeds 1).
+        deadlock_error: Task error [m or rad] below which no deadlock is declared, >= 0.
+        max_joint_step: A joint step above this [rad or m] is divergence, > 0.
+        stall_window: Time [s] over which an error at rest must fall, as
+            ``deadlock_window``.
+        stall_progress: Fraction it must fall by, in [0, 1].
+
+    All finite: :func:`checked_settings` refuses anything else, naming the argument.
     """
 
     deadlock_window: float = 0.1
@@ -49,6 +56,35 @@ class StopSettings:
     max_joint_step: float = 1.0
     stall_window: float = 0.5
     stall_progress: float = 0.01
+
+
+def checked_settings(dt: float, **given: object) -> StopSettings:
+    """The stop settings ``given`` (keyword: value), each checked against its range.
+
+    Args:
+        dt: The run's sample time [s] (windows are counted in samples).
+        **given: Values of :class:`StopSettings`' fields.
+
+    Raises:
+        InputError: A value that is not a finite number in its range (named).
+    """
+    longest = MAX_STEPS * dt
+    window = f"a time > 0 and <= {longest:g} [s] (clik.bounds.MAX_STEPS samples)"
+    ranges = {
+        "deadlock_window": (0.0, longest, True, window),
+        "stall_window": (0.0, longest, True, window),
+        "deadlock_ratio": (0.0, 1.0, False, "a ratio in [0, 1]"),
+        "deadlock_error": (0.0, math.inf, False, "a finite task error >= 0 [m or rad]"),
+        "max_joint_step": (0.0, math.inf, True, "a finite joint step > 0 [rad or m]"),
+        "stall_progress": (0.0, 1.0, False, "a fraction in [0, 1]"),
+    }
+    out: dict[str, float] = {}
+    for name, value in given.items():
+        low, high, strict, expected = ranges[name]
+        if not in_range(value, low, high, strict):
+            raise InputError(name, expected, value)
+        out[name] = real(value)
+    return StopSettings(**out)
 
 
 class StopChecks:

@@ -13,27 +13,24 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from clik.bounds import MAX_RECORD_BYTES, MAX_STEPS
+from clik.bounds import MAX_RECORD_BYTES, MAX_STEPS, in_range, real
+from clik.constraints.constraint_set import ConstraintSet
 from clik.engine import ENGINES
 from clik.errors import InputError
 from clik.loop.gains import row_gains, stability_margin
 from clik.loop.laws import LawName, check_law, nonlinear, prioritized, transpose
 from clik.loop.recording import bytes_per_sample, kept_samples
 from clik.loop.reference_stream import REFERENCE_CHUNK, ReferenceChunks
-from clik.loop.stop_checks import StopSettings
+from clik.loop.stop_checks import checked_settings
 from clik.loop.tracking import ProgressCallback, _Run
 from clik.model.reach import reach_bound
 from clik.outputs.result import TrackingResult
 from clik.tasks.extended_task import ExtendedTask
 from clik.tasks.task import Task
 from clik.trajectory import Trajectory, time_grid
-
-if TYPE_CHECKING:
-    from clik.constraints import ConstraintSet
 
 
 class ReachWarning(UserWarning):
@@ -58,8 +55,15 @@ class Tracker:
     """The CLIK loop for one robot, task and law.
 
     Build once, then call :meth:`run` with a trajectory (and again with another
-    one). Each run owns its extended task, its record and its constraint state
-    (:class:`~clik.constraints.ConstraintRun`), so trackers and runs never share mutable state.
+    one). Each run owns everything it writes: its Pinocchio data, extended task and
+    the law's scratch arrays, its record, its constraint state
+    (:class:`~clik.constraints.ConstraintRun`, on a snapshot of the constraint set taken
+    when the run starts, with its own collision geometry data). The tracker, its task,
+    robot and constraint set are only read by a run, so one tracker (or several on the
+    same robot and set) may run in several threads at once, each run giving what it
+    gives alone, in either engine. A change to the constraint set (``set_obstacles``,
+    ``move_obstacle``) applies to the runs that start after it; the robot's model may
+    not change at all (refused: :meth:`~clik.model.robot.Robot.check_model`).
 
     Args:
         task: The task (frame, kind, mask).
@@ -74,6 +78,10 @@ class Tracker:
             ``"python"`` (the loop of :mod:`clik.loop.tracking`, the engine's readable
             specification).
             Both give the same statuses, events and joint trajectories.
+
+    Raises:
+        InputError: A bad setting (named); ``constraints`` not a ``ConstraintSet`` built
+            on the task's robot; or the robot's model changed after loading.
     """
 
     def __init__(
@@ -89,6 +97,13 @@ class Tracker:
     ) -> None:
         if engine not in ENGINES:
             raise InputError("engine", " or ".join(repr(e) for e in ENGINES), engine)
+        if not isinstance(task, Task):
+            raise InputError("task", "a clik.Task", type(task).__name__)
+        task.robot.check_model()
+        if constraints is not None and not isinstance(constraints, ConstraintSet):
+            raise InputError("constraints", "a ConstraintSet or None", type(constraints).__name__)
+        if constraints is not None and constraints.robot is not task.robot:
+            raise InputError("constraints", "a ConstraintSet built on the task's robot")
         self.engine = engine
         self.task = task
         self.robot = task.robot
@@ -104,12 +119,9 @@ class Tracker:
             2.0 * self.alpha if beta_max is None else _positive(beta_max, "beta_max", "[1/s]")
         )
         self.constraints = constraints
-        m, nv = task.m, self.robot.nv
+        m = task.m
         limit = constraints.row_limit(m, self.law) if constraints is not None else 0
         self.rows = m + limit
-        self._b = np.zeros(self.rows)
-        self._work = np.zeros(self.rows)
-        self._jte = np.zeros(nv)
 
     # -- the law -----------------------------------------------------------------------
 
@@ -122,13 +134,13 @@ class Tracker:
         """
         m = ext.m
         if self.law == "pseudoinverse":
-            b = ext.demand(r, self._b[:r])
+            b = ext.demand(r, ext.demand_out[:r])
             return prioritized(ext.J[:m], b[:m], ext.J[m:r], b[m:r], out, self.damping, self.dt)
-        J, e, K, ff, work = ext.J[:r], ext.e[:r], ext.K[:r], ext.ff[:r], self._work[:r]
+        J, e, K, ff, work = ext.J[:r], ext.e[:r], ext.K[:r], ext.ff[:r], ext.work[:r]
         if self.law == "transpose":
             transpose(J, e, K, ff, out, work)
         else:
-            nonlinear(J, e, K, ff, out, work, self._jte, self.beta_max)
+            nonlinear(J, e, K, ff, out, work, ext.jte, self.beta_max)
         return 0.0
 
     # -- the loop ----------------------------------------------------------------------
@@ -150,26 +162,37 @@ class Tracker:
     ) -> TrackingResult:
         """Track ``trajectory`` from ``q0`` (default: the robot's reference configuration).
 
+        Every argument is checked here, before the run, in both engines (a finite number
+        in its range; an :class:`~clik.errors.InputError` names the argument otherwise).
+
         Args:
             trajectory: Desired task trajectory; sampled chunk by chunk on the time grid.
             q0: Initial configuration (nq,).
-            record_every: Keep every k-th sample (and the last) in the result's arrays;
-                scalars such as ``max_task_error`` still see every sample.
-            progress: Called as ``progress(k, N)`` about a hundred times during the run.
-            deadlock_window: Time [s] the deadlock condition must hold before stopping.
+            record_every: Keep every k-th sample (and the last) in the result's arrays, an
+                integer >= 1; scalars such as ``max_task_error`` still see every sample.
+                One at least the run's sample count keeps the first and last samples only
+                (it is taken as that count).
+            progress: Called as ``progress(k, N)`` about a hundred times during the run,
+                or None. It may change the constraint set (``set_obstacles``,
+                ``move_obstacle``): the change applies to the next run.
+            deadlock_window: Time [s] the deadlock condition must hold before stopping,
+                > 0 and at most ``clik.bounds.MAX_STEPS * dt``.
             deadlock_ratio: Laws (9), (8): deadlock when
-                ``|J_e^T K e_e| <= ratio |J_e|_F |K e_e|``...
-            deadlock_error: ... while the task error norm exceeds this [m or rad] (law
-                (10): while most of the task's demand is not realised).
-            max_joint_step: A joint step ``|qdot| dt`` above this [rad or m] stops the run
-                with status ``diverged``; checked every sample.
-            settle: Extra time [s] after the trajectory's end, holding its final value.
+                ``|J_e^T K e_e| <= ratio |J_e|_F |K e_e|``, in [0, 1]...
+            deadlock_error: ... while the task error norm exceeds this [m or rad], >= 0
+                (law (10): while most of the task's demand is not realised).
+            max_joint_step: A joint step ``|qdot| dt`` above this [rad or m], > 0, stops
+                the run with status ``diverged``; checked every sample.
+            settle: Extra time [s] after the trajectory's end, holding its final value,
+                >= 0.
             stall_window: With the reference at rest, a task error that falls by less
-                than ``stall_progress`` (a fraction) over this time [s] is a deadlock too.
-            stall_progress: See ``stall_window``.
+                than ``stall_progress`` over this time [s] is a deadlock too; in the range
+                of ``deadlock_window``.
+            stall_progress: See ``stall_window``: a fraction in [0, 1].
 
         Raises:
-            InputError: A bad argument.
+            InputError: A bad argument; or the robot's model changed after loading
+                (``robot.model``).
             InfeasibleError: ``q0`` outside the robot's joint limits.
 
         Warns:
@@ -177,22 +200,47 @@ class Tracker:
             StabilityWarning: The gains break explicit Euler's bound at ``q0``.
         """
         robot = self.robot
+        robot.check_model()
         q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
         robot.check_within_limits(q, "q0")
-        if not isinstance(record_every, int | np.integer) or record_every < 1:
-            raise InputError("record_every", "an integer >= 1", record_every)
-        if not (math.isfinite(settle) and settle >= 0.0):
-            raise InputError("settle", "a time >= 0 [s]", settle)
-        self.check_size(trajectory.duration + settle, int(record_every))
-        t = time_grid(trajectory.duration + settle, self.dt)
+        duration = self._check_run(trajectory, record_every, progress, settle)
+        self.check_size(duration + settle, int(record_every))
+        settings = checked_settings(
+            self.dt, deadlock_window=deadlock_window, deadlock_ratio=deadlock_ratio,
+            deadlock_error=deadlock_error, max_joint_step=max_joint_step,
+            stall_window=stall_window, stall_progress=stall_progress,
+        )  # fmt: skip
+        t = time_grid(duration + settle, self.dt)
         chunks, out_of_reach = self._reference(trajectory, t)
         self._warn_stability(q)
-        settings = StopSettings(
-            deadlock_window, deadlock_ratio, deadlock_error, max_joint_step, stall_window,
-            stall_progress,
-        )  # fmt: skip
-        run = _Run(self, t, chunks, int(record_every), settings, progress)
+        every = min(int(record_every), t.shape[0])  # beyond N: the first and last samples
+        run = _Run(self, t, chunks, every, settings, progress)
         return run.execute(q, out_of_reach)
+
+    def _check_run(
+        self, trajectory: Trajectory, record_every: int, progress: object, settle: float
+    ) -> float:
+        """Refuse a bad trajectory, ``record_every``, ``progress`` or ``settle``.
+
+        Returns:
+            The trajectory's duration [s].
+        """
+        if not callable(getattr(trajectory, "sample", None)):
+            expected = "a clik.trajectory.Trajectory (a duration and sample(t))"
+            raise InputError("trajectory", expected, type(trajectory).__name__)
+        if isinstance(record_every, bool) or not isinstance(record_every, int | np.integer):
+            raise InputError("record_every", "an integer >= 1", record_every)
+        if record_every < 1:
+            raise InputError("record_every", "an integer >= 1", record_every)
+        if progress is not None and not callable(progress):
+            raise InputError("progress", "a callable progress(k, N) or None", progress)
+        duration = real(getattr(trajectory, "duration", None))
+        if not in_range(duration, 0.0):
+            expected = "a trajectory whose duration is a finite time >= 0 [s]"
+            raise InputError("trajectory.duration", expected, getattr(trajectory, "duration", None))
+        if not in_range(settle, 0.0, MAX_STEPS * self.dt):
+            raise InputError("settle", f"a time >= 0 and <= {MAX_STEPS * self.dt:g} [s]", settle)
+        return duration
 
     def check_size(self, duration: float, record_every: int) -> None:
         """Refuse a run too long or whose record would not fit in memory.
@@ -297,6 +345,9 @@ def track(
     engine: str = "compiled",
 ) -> TrackingResult:
     """Track a Cartesian trajectory with a CLIK law (the one-call form of :class:`Tracker`).
+
+    The arguments are :class:`Tracker`'s and :meth:`Tracker.run`'s, checked the same
+    way before the run (an :class:`~clik.errors.InputError` names a bad one).
 
     Example:
         >>> robot = clik.Robot.load("planar4r")

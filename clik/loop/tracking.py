@@ -62,7 +62,15 @@ class TrackerSettings(Protocol):
 
 
 class _Run:
-    """One run of a ``Tracker``: its arrays, constraint state, checks and record."""
+    """One run of a ``Tracker``: its arrays, constraint state, checks and record.
+
+    Everything a run writes is its own: its Pinocchio data (:attr:`data`), its extended
+    task and the law's scratch arrays, its constraint state on a snapshot of the
+    tracker's constraint set (:attr:`cset`: a set changed during the run, e.g. by
+    ``set_obstacles`` from ``progress``, applies to the next run), its record. Robots,
+    tasks, trackers and constraint sets are only read, so runs may share them across
+    threads.
+    """
 
     def __init__(
         self,
@@ -81,18 +89,21 @@ class _Run:
         self.N = t.shape[0]
         m, nv = task.m, robot.nv
         self.ext = ExtendedTask(m, tracker.rows, nv, tracker.K_task)
-        cset = tracker.constraints
+        python = tracker.engine == "python"
+        self.data: pin.Data  # the run's own (the Python engine's: the compiled one's is in C++)
+        if python:
+            self.data = robot.model.createData()
+        self.cset = cset = None if tracker.constraints is None else tracker.constraints.snapshot()
         self.rec = Recorder(
             self.N, record_every, robot.nq, nv, task.has_position,
             task.has_orientation and task.has_position, cset is not None,
         )  # fmt: skip
-        self.crun: ConstraintRun | None = (
-            None
-            if cset is None
-            else ConstraintRun(
-                cset, m, tracker.law, tracker.alpha, t, self.rec.capacity, task.frame_id, task.rows
-            )
-        )
+        self.crun: ConstraintRun | None = None
+        if cset is not None and python:  # the compiled engine's is in C++
+            self.crun = ConstraintRun(
+                cset, m, tracker.law, tracker.alpha, t, self.rec.capacity, task.frame_id,
+                task.rows, self.data,
+            )  # fmt: skip
         self.monitor = ViolationMonitor(_joint_range(robot, cset))
         self.checks = StopChecks(settings, tracker.law, self.dt)
         self.e6 = np.zeros(6)
@@ -112,7 +123,7 @@ class _Run:
 
         With constraints every joint's Jacobian is computed: their rows need them.
         """
-        model, data, fid = self.robot.model, self.robot.data, self.task.frame_id
+        model, data, fid = self.robot.model, self.data, self.task.frame_id
         if self.crun is None:
             return pin.computeFrameJacobian(model, data, q, fid, LWA)
         pin.computeJointJacobians(model, data, q)
@@ -122,7 +133,7 @@ class _Run:
     def task_rows(self, J6: np.ndarray, p_d: np.ndarray | None, R_d: np.ndarray | None,
                   xdot_d: np.ndarray) -> None:  # fmt: skip
         """Task error (6) ``e = (p_d - p, log3(R_d R^T))`` and rows of ``J`` into the task rows."""
-        placement = self.robot.data.oMf[self.task.frame_id]
+        placement = self.data.oMf[self.task.frame_id]
         e6, rows, m = self.e6, self.task.rows, self.task.m
         if p_d is not None and self.task.has_position:
             np.subtract(p_d, placement.translation, out=e6[:3])
@@ -180,7 +191,7 @@ class _Run:
     def record(self, k: int, q: np.ndarray, qdot: np.ndarray, p_d: np.ndarray | None,
                err: float, err_rot: float, r: int) -> None:  # fmt: skip
         """Keep sample ``k``."""
-        placement = self.robot.data.oMf[self.task.frame_id]
+        placement = self.data.oMf[self.task.frame_id]
         j = self.rec.keep(k, q, qdot, placement.translation, p_d, err, err_rot)
         if self.crun is not None:
             assert self.rec.active is not None and self.rec.distance is not None

@@ -6,8 +6,9 @@ concerns it delegates sit one per module: where a robot is read from
 reads them (``urdf_check``, with ``urdf_joints``, ``urdf_links`` and
 ``urdf_numbers``; ``mesh_check``), xacro expansion
 (``xacro_expand``), the models built from a checked URDF (``loading``), joint
-kinds and units (``joints``), locked and mimic joints (``locking``, ``mimic``)
-and configuration checks (``configuration``). Beside them, what the model alone
+kinds and units (``joints``), locked and mimic joints (``locking``, ``mimic``),
+configuration checks (``configuration``) and the check that a loaded model
+has not changed since (``model_signature``). Beside them, what the model alone
 decides: planar arms written as URDF (``planar_arm``) and the bound on how far a
 frame can reach (``reach``).
 """

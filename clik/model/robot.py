@@ -14,6 +14,7 @@ Joint kinds and units are in :mod:`clik.model.joints`, locked joints in
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -33,6 +34,7 @@ from clik.model.loading import (
 )
 from clik.model.locking import lock_values, reduced, set_locked
 from clik.model.mimic import Mimic, mimic_joints, mimic_values, warn_free_leaders
+from clik.model.model_signature import check_unchanged, joint_signature, model_signature
 from clik.model.sources import available_robots, source_files
 from clik.model.urdf_check import check_urdf
 from clik.model.xacro_expand import check_xacro_args, expand_xacro, is_xacro
@@ -62,6 +64,17 @@ class Robot:
         mimics: The URDF's mimic joints: follower name -> :class:`Mimic`.
         locked: Joints removed from the model, with their value [rad or m]: the
             ``lock`` given to :meth:`load` and the mimic followers it locked.
+        signature: ``(nq, nv, njoints, nframes)`` of ``model`` when the robot was made
+            (:meth:`check_model`).
+
+    The model is the robot's for good: everything derived from it (``data``, limits,
+    names, ``q_reference``, tasks, constraint sets, compiled solvers) is sized by it, so
+    a model changed afterwards (``robot.model.addJoint(...)``) is refused by every run
+    and solve (:meth:`check_model`); load a new robot instead. ``data`` is a
+    convenience for the caller's own Pinocchio calls in the thread that made the robot:
+    runs and solves never use it (each has its own), and clik's conveniences use
+    :meth:`thread_data` (``data`` in that thread, another data in any other), so robots,
+    tasks and constraint sets may be shared by threads.
     """
 
     def __init__(
@@ -79,6 +92,10 @@ class Robot:
         self.package_dirs = package_dirs
         self.model = model
         self.data = model.createData()
+        self.signature = model_signature(model)
+        self._joints = joint_signature(model)
+        self._threads = threading.local()  # each thread's own data (thread_data)
+        self._threads.data = self.data  # this thread's: the robot's own, as before threads
         self.collision_model = collision_model
         self.collision_data = collision_model.createData()
         self._q_reference = self.check_configuration(q_reference, "q_reference")
@@ -205,6 +222,33 @@ class Robot:
         return available_robots()
 
     # ------------------------------------------------------------------ models
+
+    def thread_data(self) -> pin.Data:
+        """The calling thread's ``pin.Data`` of the model.
+
+        :attr:`data` in the thread that made the robot, one of its own (made at its first
+        call) in any other thread. What clik's conveniences compute with
+        (``Task.placement``, ``Task.jacobian``, a result's manipulability), so that they
+        fill :attr:`data` as before in a single-threaded program while threads never
+        share one.
+        """
+        data: pin.Data | None = getattr(self._threads, "data", None)
+        if data is None:
+            data = self._threads.data = self.model.createData()
+        return data
+
+    def check_model(self, full: bool = True) -> None:
+        """Refuse a model changed since the robot was made (its sizes, or its joints).
+
+        Args:
+            full: Also compare every joint (kind, configuration and velocity indices);
+                False compares only :attr:`signature` (about 0.5 us, a solve's check).
+
+        Raises:
+            InputError: ``robot.model`` changed after loading (names the old and new
+                sizes): load a new :class:`Robot`.
+        """
+        check_unchanged(self.model, self.name, self.signature, self._joints, full)
 
     @property
     def visual_model(self) -> pin.GeometryModel:

@@ -85,10 +85,10 @@ class _Compiled:
         nq: The robot's ``nq``.
     """
 
-    __slots__ = ("limits", "nq", "seed", "solver", "starts")
+    __slots__ = ("limits", "nq", "seed", "signature", "solver", "starts")
 
-    def __init__(self, solver: Any, nq: int) -> None:
-        self.solver, self.nq = solver, nq
+    def __init__(self, solver: Any, nq: int, signature: tuple[int, ...]) -> None:
+        self.solver, self.nq, self.signature = solver, nq, signature
         self.seed: int | None = None
         self.limits: tuple[bytes, bytes] | None = None
         self.starts: np.ndarray | None = None
@@ -136,6 +136,7 @@ def _new_compiled(task: Task, key: tuple[Any, ...]) -> _Compiled:
     s = SolveSettings(check_law(key[0]), *key[1:8])
     check_settings(s)
     robot = task.robot
+    robot.check_model()  # the whole model, joints too: the solver is kept
     return _Compiled(
         _compiled_engine().Solver(
             robot.model, task.frame_id, task.rows.tolist(), robot.q_reference, law=s.law,
@@ -143,6 +144,7 @@ def _new_compiled(task: Task, key: tuple[Any, ...]) -> _Compiled:
             orientation_tolerance=s.orientation_tolerance, max_iterations=s.max_iterations,
         ),
         robot.nq,
+        robot.signature,
     )  # fmt: skip
 
 
@@ -152,9 +154,12 @@ def solve_compiled(
     """``solve`` in the compiled engine: the same checks, iteration, attempts and restarts.
 
     The solver comes from the cache (:data:`_SOLVERS`), so a repeated solve costs
-    little more than the C++ run. A ``pin.SE3`` target and a ``q0`` that is None or
-    a float array of ``nq`` entries go to C++ as they are, and C++ checks that their
-    values are finite; anything else, or a value that is not finite, goes through
+    little more than the C++ run. The robot's model is checked first (its sizes,
+    :attr:`~clik.model.robot.Robot.signature`): a model changed after loading is refused,
+    and a cached solver is used only on the model sizes it was built for. A
+    ``pin.SE3`` target and a ``q0`` that is None or a float array of ``nq`` entries go
+    to C++ as they are, and C++ checks that their values are finite; anything else, or
+    a value that is not finite, goes through
     :func:`~clik.solving.solve_problem.checked_target` and ``check_configuration``
     (which name the bad input).
     The engine runs the first attempt from ``q0``; only when it fails are the
@@ -162,14 +167,18 @@ def solve_compiled(
     creating the generator costs ~10-20 us; kept for the next solve with the same
     seed) and handed over to continue the solve.
     """
+    robot, model = task.robot, task.robot.model
+    signature = (model.nq, model.nv, model.njoints, model.nframes)  # ~0.5 us: robot.signature
+    if signature != robot.signature:
+        robot.check_model()  # raises: the model changed after loading
     solvers = _SOLVERS.get(id(task)) or _solvers_of(task)
     try:
         compiled = solvers.pop(key, None)  # out of the cache while it runs
     except TypeError:  # an unhashable setting (e.g. a 0-d NumPy array): never kept
         compiled = None
-    if compiled is None:
+    if compiled is None or compiled.signature != signature:  # never another model's
         compiled = _new_compiled(task, key)
-    solver, robot = compiled.solver, task.robot
+    solver = compiled.solver
     q = np.empty(compiled.nq)  # where the engine writes the solve's configuration
     if type(target) is pin.SE3 and (q0 is None or _plain_configuration(q0, compiled.nq)):
         start = time.perf_counter()

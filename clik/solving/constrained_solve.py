@@ -115,13 +115,18 @@ while it runs and puts it back after, so solves in other threads build their own
 
 
 def _take(cset: ConstraintSet, task: Task) -> _Prepared:
-    """The prepared set for ``cset``, out of the cache (built when missing or stale)."""
-    key = (cset.fingerprint(), id(task), task.frame_id, tuple(task.rows))
+    """The prepared set for ``cset``, out of the cache (built when missing or stale).
+
+    Built on a snapshot of the set (:meth:`ConstraintSet.snapshot`): a change to the set
+    while the solve runs applies to the next solve.
+    """
+    snapshot = cset.snapshot()
+    key = (snapshot.fingerprint(), id(task), task.frame_id, tuple(task.rows))
     prepared = _PREPARED.pop(id(cset), None)
     if prepared is None or prepared.key != key:
         if prepared is None:
             weakref.finalize(cset, _PREPARED.pop, id(cset), None)
-        prepared = _Prepared(cset, task, key)
+        prepared = _Prepared(snapshot, task, key)
     return prepared
 
 
@@ -166,7 +171,8 @@ class _ConstrainedLaw:
     def errors(self, q: np.ndarray) -> tuple[float, float]:
         """Task error norms at ``q``: position rows [m], orientation rows [rad] (6)."""
         task = self.task
-        e6 = task.full_error(task.placement(q), self.p_d, self.R_d)
+        placement = self.check.frame_placement(q, task.frame_id)  # the solve's own data
+        e6 = task.full_error(placement, self.p_d, self.R_d)
         rows = task.rows
         return (
             float(np.linalg.norm(e6[rows[rows < 3]])),
@@ -287,6 +293,7 @@ def _check_constraints(task: Task, constraints: ConstraintSet, tracking_attempts
         raise InputError("constraints", "a ConstraintSet or None", type(constraints).__name__)
     if constraints.robot is not task.robot:
         raise InputError("constraints", "a ConstraintSet built on the task's robot")
+    task.robot.check_model()
     moving = [o.name for o in constraints.obstacles if o.moving]
     if moving:
         raise InputError("constraints", "obstacles at rest (solve mode has no time)", moving)

@@ -46,8 +46,14 @@ def constraint_label(key: str) -> str:
     return key
 
 
+LWA = pin.LOCAL_WORLD_ALIGNED
+
+
 class PoseCheck:
     """Checks configurations against one constraint set (its own Pinocchio and coal data).
+
+    One checker serves one solve at a time (a solve takes its prepared checker out of
+    the cache while it runs); the set, robot and task are only read.
 
     The robot's own joint limits are checked here; every kind of the set checks its own
     constraints (:meth:`~clik.constraints.kind.ConstraintKind.check`), reading the
@@ -107,8 +113,12 @@ class PoseCheck:
         return self.data.oMf[frame_id]
 
     def task_jacobian(self, q: np.ndarray) -> np.ndarray | None:
-        """The task's Jacobian (m, nv) at ``q`` (3), or None without a task."""
-        return None if self.task is None else self.task.jacobian(q)
+        """The task's Jacobian (m, nv) at ``q`` (3), or None without a task (own data)."""
+        task = self.task
+        if task is None:
+            return None
+        J6 = pin.computeFrameJacobian(self.model, self.data, q, task.frame_id, LWA)
+        return J6[task.rows]
 
     def _robot_limits(self, q: np.ndarray) -> list[Violation]:
         """Joints outside the robot's own limits."""

@@ -39,7 +39,13 @@ import pinocchio as pin
 from clik.errors import InputError
 from clik.loop.laws import LawName, check_law
 from clik.solving.compiled_solve import solve_compiled
-from clik.solving.solve_problem import SolveProblem, SolveSettings, check_settings, checked_target
+from clik.solving.solve_problem import (
+    SolveProblem,
+    SolveSettings,
+    check_seed,
+    check_settings,
+    checked_target,
+)
 from clik.solving.solve_result import SolveResult, converged_reason, failure_reason
 from clik.tasks.task import Task
 
@@ -79,9 +85,11 @@ def solve(
         mu: Levenberg-Marquardt factor: ``lambda^2 = lambda_0^2 + mu |e|^2``.
         tolerance: Position tolerance [m].
         orientation_tolerance: Orientation tolerance [rad].
-        max_iterations: Iterations per attempt.
-        restarts: Random restarts (within joint limits) after a failed attempt.
-        seed: Seed of the restarts' random generator.
+        max_iterations: Iterations per attempt, an integer >= 1 (at most
+            :data:`~clik.bounds.MAX_ITERATIONS`).
+        restarts: Random restarts (within joint limits) after a failed attempt, an integer
+            >= 0 (at most :data:`~clik.bounds.MAX_RESTARTS`).
+        seed: Seed of the restarts' random generator, an integer >= 0 (None: fresh entropy).
         engine: ``"compiled"`` (default) runs the iteration in clik's C++ engine;
             ``"python"`` runs the code of this module. Both give the same results
             (the same restarts from the same seed; ``q`` equal to rounding).
@@ -95,9 +103,14 @@ def solve(
         tracking_attempts: With ``constraints``, the starts of the constrained law (10)
             tried when the unconstrained pose misses a constraint.
 
+    A task and a constraint set may serve solves in several threads at once: each solve
+    has its own Pinocchio data and solver.
+
     Raises:
-        InputError: A bad argument, named.
+        InputError: A bad argument, named; or the robot's model changed after loading.
     """
+    if seed is not None and (type(seed) is not int or seed < 0):
+        check_seed(seed)  # raises unless a NumPy integer >= 0
     if constraints is not None:
         given: dict[str, Any] = {
             "law": law, "step": step, "damping": damping, "mu": mu, "tolerance": tolerance,
@@ -115,6 +128,7 @@ def solve(
         return solve_compiled(task, target, q0, key, seed)
     if engine != "python":
         raise InputError("engine", "'compiled' or 'python'", engine)
+    task.robot.check_model()
     settings = SolveSettings(
         check_law(law), step, damping, mu, tolerance, orientation_tolerance,
         max_iterations, restarts,
@@ -165,6 +179,7 @@ def _solve_with_constraints(
     """:func:`solve` with constraints (:func:`clik.solving.constrained_solve.solve_constrained`)."""
     from clik.solving.constrained_solve import solve_constrained
 
+    task.robot.check_model()
     checked = checked_target(task, target)
     robot = task.robot
     q_start = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")

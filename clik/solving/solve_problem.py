@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from clik.bounds import MAX_ITERATIONS, MAX_RESTARTS, in_range
 from clik.errors import InputError
 from clik.loop.laws import solve_small
 from clik.tasks.task import Task
@@ -73,18 +74,31 @@ def check_settings(settings: SolveSettings) -> None:
     """Refuse settings the iteration cannot use, naming the argument."""
     if settings.law == "nonlinear":
         raise InputError("law", "'pseudoinverse' or 'transpose' in solve mode", settings.law)
-    if not isinstance(settings.max_iterations, int) or settings.max_iterations < 1:
-        raise InputError("max_iterations", "an integer >= 1", settings.max_iterations)
-    if not isinstance(settings.restarts, int) or settings.restarts < 0:
-        raise InputError("restarts", "an integer >= 0", settings.restarts)
+    for name, low, high, bound in (
+        ("max_iterations", 1, MAX_ITERATIONS, "clik.bounds.MAX_ITERATIONS, a C int"),
+        ("restarts", 0, MAX_RESTARTS, "clik.bounds.MAX_RESTARTS"),
+    ):
+        value = getattr(settings, name)
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+            raise InputError(name, f"an integer >= {low}", value)
+        if value > high:
+            raise InputError(name, f"an integer <= {high} ({bound})", value)
     for name in ("tolerance", "orientation_tolerance", "step"):
         value = getattr(settings, name)
-        if not (math.isfinite(value) and value > 0):
+        if not in_range(value, 0.0, strict=True):
             raise InputError(name, "a positive finite number", value)
     for name in ("damping", "mu"):
         value = getattr(settings, name)
-        if not (math.isfinite(value) and value >= 0):
+        if not in_range(value, 0.0):
             raise InputError(name, "a finite number >= 0", value)
+
+
+def check_seed(seed: object) -> None:
+    """Refuse a seed of the restarts that is not None or an integer >= 0."""
+    if seed is None or (type(seed) is int and seed >= 0):
+        return
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise InputError("seed", "an integer >= 0 or None (fresh entropy)", seed)
 
 
 class SolveProblem:
@@ -99,6 +113,8 @@ class SolveProblem:
     def __init__(self, task: Task, target: object, settings: SolveSettings) -> None:
         self.task, self.settings = task, settings
         self.robot = task.robot
+        self.data = task.robot.model.createData()
+        """The solve's own Pinocchio data (never the robot's: solves may run in threads)."""
         # (unused placeholders where the task has no such rows)
         self.p_d, self.R_d = checked_target(task, target)
         self.full_pose = task.m == 6
@@ -117,7 +133,7 @@ class SolveProblem:
         A full pose uses ``log6(oMf^-1 oMd)`` in the frame with its exact Jacobian
         ``Jlog6 J_local``; a masked task the world-aligned error (6) and ``J`` (3).
         """
-        model, data, fid = self.robot.model, self.robot.data, self.task.frame_id
+        model, data, fid = self.robot.model, self.data, self.task.frame_id
         if self.full_pose:
             pin.computeJointJacobians(model, data, q)
             fMd = pin.updateFramePlacement(model, data, fid).actInv(self.target_se3)
@@ -136,7 +152,7 @@ class SolveProblem:
 
     def world_errors(self) -> tuple[float, float]:
         """Position and orientation error norms in the world frame, at the last ``q``."""
-        oMf = self.robot.data.oMf[self.task.frame_id]
+        oMf = self.data.oMf[self.task.frame_id]
         pos = rot = 0.0
         if self.task.has_position:
             pos = float(np.linalg.norm(self.p_d - oMf.translation))

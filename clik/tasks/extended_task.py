@@ -25,6 +25,8 @@ class ExtendedTask:
         e: Extended error (rows,).
         K: Gain per row [1/s] (rows,).
         ff: Feed-forward per row, ``xdot_d`` for the task and (14) for obstacles (rows,).
+        work, demand_out: The law's scratch rows (rows,); ``jte`` its (nv,) one: the
+            run's own, like everything here.
     """
 
     def __init__(self, m: int, rows: int, nv: int, K_task: np.ndarray) -> None:
@@ -34,6 +36,9 @@ class ExtendedTask:
         self.K = np.zeros(rows)
         self.ff = np.zeros(rows)
         self.K[:m] = K_task
+        self.work = np.zeros(rows)
+        self.demand_out = np.zeros(rows)
+        self.jte = np.zeros(nv)
 
     def demand(self, r: int, out: np.ndarray) -> np.ndarray:
         """``K e + ff`` of the first ``r`` rows (r,): what law (10) asks each row to do."""

@@ -69,7 +69,7 @@ def manipulability_along(
     Returns:
         A new array (N,) [m^p].
     """
-    model, data = robot.model, robot.data
+    model, data = robot.model, robot.thread_data()  # the calling thread's own
     n = q.shape[0]
     J = np.empty((n, len(rows), model.nv))
     for k in range(n):

@@ -51,6 +51,12 @@ class Task:
         axes: Optional subset of the kind's components, among
             ``"x", "y", "z", "rx", "ry", "rz"`` (e.g. ``["x", "y"]`` for a planar arm).
 
+    Raises:
+        InputError: A bad kind or axes; or the robot's model changed after loading.
+        FrameNotFound: No such frame.
+
+    A task is only read by runs and solves: it may serve several threads at once.
+
     Attributes:
         frame: Frame name.
         frame_id: Pinocchio frame index.
@@ -81,6 +87,7 @@ class Task:
                     "task.axes", f"distinct names among {valid} for a {kind} task", list(axes)
                 )
             rows = tuple(sorted(AXES.index(a) for a in axes))
+        robot.check_model()
         self.robot = robot
         self.frame = frame
         self.frame_id = robot.frame_id(frame)
@@ -105,9 +112,15 @@ class Task:
     # -- evaluation (used by the tracking loop and by tests) ---------------------------
 
     def placement(self, q: np.ndarray) -> pin.SE3:
-        """Frame placement in the world at ``q`` (runs forward kinematics)."""
-        model, data = self.robot.model, self.robot.data
-        pin.framesForwardKinematics(model, data, q)
+        """Frame placement in the world at ``q`` (runs forward kinematics).
+
+        This and :meth:`jacobian` compute in the calling thread's own data
+        (:meth:`~clik.model.robot.Robot.thread_data`): a task may be shared by threads.
+        """
+        robot = self.robot
+        robot.check_model(full=False)
+        data = robot.thread_data()
+        pin.framesForwardKinematics(robot.model, data, q)
         return data.oMf[self.frame_id].copy()
 
     def full_error(
@@ -129,6 +142,9 @@ class Task:
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         """Masked task Jacobian ``J`` (m, nv) at ``q``, eq. (3), ``LOCAL_WORLD_ALIGNED``."""
-        model, data = self.robot.model, self.robot.data
-        J6 = pin.computeFrameJacobian(model, data, q, self.frame_id, pin.LOCAL_WORLD_ALIGNED)
+        robot = self.robot
+        robot.check_model(full=False)
+        J6 = pin.computeFrameJacobian(
+            robot.model, robot.thread_data(), q, self.frame_id, pin.LOCAL_WORLD_ALIGNED
+        )
         return J6[self.rows]

@@ -9,12 +9,13 @@ import numpy as np
 from clik.errors import InputError
 from clik.trajectory._validate import ROTATION_TOLERANCE
 
-_TRAILING_SHAPES: dict[str, tuple[int, ...]] = {
+TRAILING_SHAPES: dict[str, tuple[int, ...]] = {
     "position": (3,),
     "linear_velocity": (3,),
     "rotation": (3, 3),
     "angular_velocity": (3,),
 }
+"""Each array of a :class:`Reference` has the shape ``(N, *TRAILING_SHAPES[name])``."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,7 +61,7 @@ class Reference:
             raise InputError("trajectory", "finite values", f"t[{k}] = {t[k]}")
         object.__setattr__(self, "t", t)
         n = t.shape[0]
-        for name, trailing in _TRAILING_SHAPES.items():
+        for name, trailing in TRAILING_SHAPES.items():
             value = getattr(self, name)
             if value is None:
                 continue
