@@ -197,6 +197,7 @@ def prioritized(
     out: np.ndarray,
     damping: float,
     dt: float,
+    out_c: np.ndarray | None = None,
 ) -> float:
     r"""Law (10) on the extended task, constraints first and the task in their null space.
 
@@ -231,6 +232,8 @@ def prioritized(
         out: Joint velocity output (n,) [rad/s].
         damping: The user's constant damping ``lambda_0`` (0: none).
         dt: Sample time [s].
+        out_c: Where to write the constraint level's part ``qdot_c`` (n,) (0 without
+            constraint rows), for the speed step (:mod:`clik.loop.speed_step`); or None.
 
     Returns:
         The part of the task demand the law could not realise, ``|b - J qdot| / |b|``
@@ -252,8 +255,12 @@ def prioritized(
         rest = b_task - J.dot(qdot_c)
         qdot_t = _within_budget(JN.T.dot(damped_solve(JN.dot(JN.T), rest, epsilon, damping)), dt)
         np.add(qdot_c, qdot_t, out=out)
+        if out_c is not None:
+            out_c[:] = qdot_c
     else:
         out[:] = _within_budget(J.T.dot(damped_solve(J.dot(J.T), b_task, epsilon, damping)), dt)
+        if out_c is not None:
+            out_c[:] = 0.0
     demand = float(np.linalg.norm(b_task))
     if demand == 0.0:
         return 0.0

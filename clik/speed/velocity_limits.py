@@ -100,6 +100,11 @@ def run_within_limits(
         settle: As :meth:`Tracker.run` [s], after the stretched duration.
         progress: Called during the first run only.
 
+    The passes run the law without the tracker's own joint speed limits (their ratios
+    say how fast the law wants to go; with the limits in the law they would stop at 1);
+    when the tracker has them, the kept reference is run once more with them, and that
+    run is the result.
+
     Returns:
         The run kept, its status ``velocity_limit`` when it ran to its end with its
         ratio above 1, and its record in ``info["summary_extra"]["velocity_limits"]``.
@@ -110,6 +115,7 @@ def run_within_limits(
     """
     bounds = limits.bounds(tracker.robot)
     kwargs: dict[str, Any] = {"record_every": record_every, "settle": settle}
+    limited, tracker = tracker, tracker.without_speed_limits()  # passes: the law's own speeds
     result = tracker.run(trajectory, q0, progress=progress, **kwargs)
     ratio = peak_ratio(result, bounds)
     passes = _Passes(result, ratio, [ratio], limits.window, wall_time_s=result.wall_time_s)
@@ -150,6 +156,14 @@ def run_within_limits(
             )
         else:
             ratio = new
+    if limited.speed is not None:  # the kept reference, with the law's own speed limits
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ReachWarning)
+            warnings.simplefilter("ignore", StabilityWarning)
+            reference = trajectory if passes.kept_retimed is None else passes.kept_retimed
+            passes.kept = limited.run(reference, q0, **kwargs)
+        passes.kept_ratio = peak_ratio(passes.kept, bounds)
+        passes.wall_time_s += passes.kept.wall_time_s
     return _finish(passes, bounds, limits, trajectory)
 
 

@@ -200,6 +200,7 @@ double Law::prioritized(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot) {
     within_budget(qdot_t_);
     qdot = qdot_c_ + qdot_t_;
   } else {
+    qdot_c_.setZero();
     gram(J, A_);
     rest_.head(m) = b_task;
     damped_solve(A_, rest_, epsilon, y_);

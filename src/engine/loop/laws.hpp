@@ -41,6 +41,10 @@ class Law {
 
   const LawSettings& settings() const { return s_; }
 
+  // Law (10)'s constraint level qdot_c of the last velocity() (0 without constraint
+  // rows): the speed step's part to keep first.
+  const Vec& constraint_part() const { return qdot_c_; }
+
  private:
   double prioritized(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot);
   void constraint_level(const ExtendedTask& ext, int v, double epsilon);
