@@ -42,6 +42,7 @@ from clik.model.robot import Robot
 from clik.outputs.result import TrackingResult
 from clik.solving.solve_mode import solve
 from clik.solving.solve_result import SolveResult
+from clik.loop.joint_speed import JointSpeed, SpeedLimitWarning
 from clik.speed.speed_limits import SpeedLimits
 from clik.speed.velocity_limits import track_within_limits
 from clik.tasks.task import Task
@@ -55,6 +56,7 @@ __all__ = [
     "InfeasibleError",
     "InputError",
     "JointNotFound",
+    "JointSpeed",
     "MimicJointWarning",
     "OutputError",
     "OutputExistsError",
@@ -65,6 +67,7 @@ __all__ = [
     "RobotLoadError",
     "ScenarioError",
     "SolveResult",
+    "SpeedLimitWarning",
     "SpeedLimits",
     "StabilityWarning",
     "Task",

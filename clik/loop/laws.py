@@ -198,6 +198,7 @@ def prioritized(
     damping: float,
     dt: float,
     out_c: np.ndarray | None = None,
+    budget_blocks: bool = True,
 ) -> float:
     r"""Law (10) on the extended task, constraints first and the task in their null space.
 
@@ -234,6 +235,10 @@ def prioritized(
         dt: Sample time [s].
         out_c: Where to write the constraint level's part ``qdot_c`` (n,) (0 without
             constraint rows), for the speed step (:mod:`clik.loop.speed_step`); or None.
+        budget_blocks: Whether the task level's step budget counts in the returned
+            fraction (True: the paper's law, no speed limits); with the joint speed
+            limits the fraction is measured before it (docs/method.md, "Joint speed
+            limits in the law": a slowed demand is not a blocked one).
 
     Returns:
         The part of the task demand the law could not realise, ``|b - J qdot| / |b|``
@@ -253,15 +258,24 @@ def prioritized(
         rows = Vt[sv > RANK_TOLERANCE * max(scale, 1.0)]  # a duplicated row adds no direction
         JN = J - J.dot(rows.T).dot(rows)
         rest = b_task - J.dot(qdot_c)
-        qdot_t = _within_budget(JN.T.dot(damped_solve(JN.dot(JN.T), rest, epsilon, damping)), dt)
-        np.add(qdot_c, qdot_t, out=out)
-        if out_c is not None:
-            out_c[:] = qdot_c
+        qdot_t = JN.T.dot(damped_solve(JN.dot(JN.T), rest, epsilon, damping))
     else:
-        out[:] = _within_budget(J.T.dot(damped_solve(J.dot(J.T), b_task, epsilon, damping)), dt)
-        if out_c is not None:
-            out_c[:] = 0.0
-    demand = float(np.linalg.norm(b_task))
+        qdot_c = np.zeros(out.shape[0])
+        qdot_t = J.T.dot(damped_solve(J.dot(J.T), b_task, epsilon, damping))
+    if out_c is not None:
+        out_c[:] = qdot_c
+    if budget_blocks:
+        np.add(qdot_c, _within_budget(qdot_t, dt), out=out)
+        return _unrealised(J, b_task, out)
+    np.add(qdot_c, qdot_t, out=out)
+    blocked = _unrealised(J, b_task, out)
+    np.add(qdot_c, _within_budget(qdot_t, dt), out=out)
+    return blocked
+
+
+def _unrealised(J: np.ndarray, b: np.ndarray, qdot: np.ndarray) -> float:
+    """``|b - J qdot| / |b|``: the part of the task's demand ``qdot`` does not realise."""
+    demand = float(np.linalg.norm(b))
     if demand == 0.0:
         return 0.0
-    return float(np.linalg.norm(b_task - J.dot(out))) / demand
+    return float(np.linalg.norm(b - J.dot(qdot))) / demand

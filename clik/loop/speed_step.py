@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clik.speed.joint_speed import JointSpeedBounds
+from clik.loop.joint_speed import JointSpeedBounds
 from clik.tasks.extended_task import ExtendedTask
 
 
@@ -97,7 +97,6 @@ class SpeedStep:
         if over.any():
             sigma = float(np.min(room[over] / step[over]))
         return max(sigma, 0.0)
-
 
 
 def accel_scale(change: np.ndarray, a_dt: np.ndarray) -> float:

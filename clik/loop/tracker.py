@@ -29,11 +29,10 @@ from clik.loop.stop_checks import checked_settings
 from clik.loop.tracking import ProgressCallback, _Run
 from clik.model.reach import reach_bound
 from clik.outputs.result import TrackingResult
-from clik.speed.joint_speed import JointSpeed, JointSpeedBounds
+from clik.loop.joint_speed import JointSpeed, JointSpeedBounds
 from clik.tasks.extended_task import ExtendedTask
 from clik.tasks.task import Task
 from clik.trajectory import Trajectory, time_grid
-
 
 JOINT_SPEED = JointSpeed()
 """The default: the law keeps every joint within its URDF velocity limit."""
@@ -85,7 +84,7 @@ class Tracker:
             specification).
             Both give the same statuses, events and joint trajectories.
         joint_speed: Joint speed (and acceleration) limits the law keeps at every
-            sample (:class:`~clik.speed.joint_speed.JointSpeed`, docs/method.md "Joint
+            sample (:class:`~clik.loop.joint_speed.JointSpeed`, docs/method.md "Joint
             speed limits in the law"); default: every joint within its URDF velocity
             limit. None (or ``JointSpeed(enabled=False)``): no limit in the law.
 
@@ -168,8 +167,9 @@ class Tracker:
         if self.law == "pseudoinverse":
             b = ext.demand(r, ext.demand_out[:r])
             return prioritized(
-                ext.J[:m], b[:m], ext.J[m:r], b[m:r], out, self.damping, self.dt, out_c
-            )
+                ext.J[:m], b[:m], ext.J[m:r], b[m:r], out, self.damping, self.dt, out_c,
+                budget_blocks=self.speed is None,
+            )  # fmt: skip
         J, e, K, ff, work = ext.J[:r], ext.e[:r], ext.K[:r], ext.ff[:r], ext.work[:r]
         if self.law == "transpose":
             transpose(J, e, K, ff, out, work)

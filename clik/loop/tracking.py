@@ -40,7 +40,7 @@ if TYPE_CHECKING:
     from clik.loop.laws import LawName
     from clik.loop.reference_stream import ReferenceChunks
     from clik.model.robot import Robot
-    from clik.speed.joint_speed import JointSpeedBounds
+    from clik.loop.joint_speed import JointSpeedBounds
     from clik.tasks.task import Task
 
 ProgressCallback = Callable[[int, int], None]

@@ -30,7 +30,7 @@ from clik.model.robot import Robot
 from clik.outputs.result import TrackingResult
 from clik.scenarios.scenario import Scenario, check_dt, load_scenario
 from clik.schema import Table
-from clik.speed.joint_speed import JointSpeed
+from clik.loop.joint_speed import JointSpeed
 from clik.speed.speed_limits import SpeedLimits
 from clik.speed.velocity_limits import run_within_limits
 from clik.tasks.task import Task

@@ -38,8 +38,8 @@ from clik.constraints.registry import TABLE_KINDS
 from clik.engine import ENGINES
 from clik.errors import ScenarioError
 from clik.model.joints import JointValues
-from clik.scenarios.speed_tables import joint_speed_table, velocity_limits_table
 from clik.model.xacro_expand import is_xacro
+from clik.scenarios.speed_tables import joint_speed_table, velocity_limits_table
 from clik.schema import (
     MAX_ANGLE,
     MAX_GAIN_DT,
@@ -96,8 +96,9 @@ class Scenario:
     """The ``[constraints.velocity_limits]`` table (:func:`_velocity_limits`), kept apart from
     ``constraints`` because it adds no constraint row: it re-times the reference."""
     joint_speed: dict[str, Any] = field(default_factory=lambda: {"enabled": True})
-    """The ``[constraints.joint_speed]`` table (:func:`~clik.scenarios.speed_tables.joint_speed_table`):
-    the joint speed limits the law keeps (on by default)."""
+    """The ``[constraints.joint_speed]`` table
+    (:func:`~clik.scenarios.speed_tables.joint_speed_table`): the joint speed limits the
+    law keeps (on by default)."""
     raw: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property

@@ -1,7 +1,7 @@
 """The scenario's speed tables: ``[constraints.joint_speed]`` and ``[constraints.velocity_limits]``.
 
 ``joint_speed`` sets the limits the law keeps at every sample
-(:class:`~clik.speed.joint_speed.JointSpeed`, docs/method.md "Joint speed limits
+(:class:`~clik.loop.joint_speed.JointSpeed`, docs/method.md "Joint speed limits
 in the law"); ``velocity_limits`` the offline re-timing of the reference
 (:class:`~clik.speed.speed_limits.SpeedLimits`).
 """
@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from clik.schema import Table
-from clik.speed.joint_speed import MAX_SPEED_BOUND
+from clik.loop.joint_speed import MAX_SPEED_BOUND
 from clik.speed.speed_limits import MAX_PASSES, MAX_SCALE
 
 SPEED_UNIT = "[rad/s or m/s]"
@@ -31,14 +31,14 @@ def joint_speed_table(js: Table) -> dict[str, Any]:
     scale = js.number("scale", 1.0, minimum=0.0, strict=True)
     if scale > MAX_SCALE:
         raise js.error("scale", f"a number > 0 and <= {MAX_SCALE:g} (of the URDF limit)", scale)
+    default = js.number(
+        "default_velocity", 2.0, minimum=0.0, strict=True, unit=SPEED_UNIT, bound=MAX_SPEED_BOUND
+    )
     out = {
         "enabled": js.boolean("enabled", True),
         "scale": float(scale),
         "velocity": _limits(js, "velocity", SPEED_UNIT) if "velocity" in js.data else None,
-        "default_velocity": float(
-            js.number("default_velocity", 2.0, minimum=0.0, strict=True, unit=SPEED_UNIT,
-                      bound=MAX_SPEED_BOUND)
-        ),  # fmt: skip
+        "default_velocity": float(default),
         "acceleration": _acceleration(js),
     }
     js.done()
@@ -61,7 +61,9 @@ def _acceleration(table: Table) -> float | dict[str, float] | None:
     if value is None:
         return None
     return float(
-        table.number("acceleration", minimum=0.0, strict=True, unit=ACCEL_UNIT, bound=MAX_SPEED_BOUND)
+        table.number(
+            "acceleration", minimum=0.0, strict=True, unit=ACCEL_UNIT, bound=MAX_SPEED_BOUND
+        )
     )
 
 

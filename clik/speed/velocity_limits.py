@@ -11,6 +11,11 @@ than :data:`PROGRESS` (one that raises it is undone and made again with a
 smoother slowdown). The run kept is the one with the lowest ratio among those
 that reached the end of their trajectory.
 
+The passes run the law without the tracker's own joint speed limits
+(:mod:`clik.loop.speed_step`: their ratios say how fast the law wants to go; with
+the limits in the law they would stop at 1); when the tracker has them, the kept
+reference is run once more with them, and that run is the result.
+
 A run whose ratio stays above 1 (the law's own correction ``K e``, e.g. a start far
 from the reference, is not slowed by time scaling) does not claim it respected
 the limits: ``completed`` becomes ``velocity_limit``, with the joint, the ratio
@@ -100,11 +105,6 @@ def run_within_limits(
         settle: As :meth:`Tracker.run` [s], after the stretched duration.
         progress: Called during the first run only.
 
-    The passes run the law without the tracker's own joint speed limits (their ratios
-    say how fast the law wants to go; with the limits in the law they would stop at 1);
-    when the tracker has them, the kept reference is run once more with them, and that
-    run is the result.
-
     Returns:
         The run kept, its status ``velocity_limit`` when it ran to its end with its
         ratio above 1, and its record in ``info["summary_extra"]["velocity_limits"]``.
@@ -156,15 +156,27 @@ def run_within_limits(
             )
         else:
             ratio = new
-    if limited.speed is not None:  # the kept reference, with the law's own speed limits
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ReachWarning)
-            warnings.simplefilter("ignore", StabilityWarning)
-            reference = trajectory if passes.kept_retimed is None else passes.kept_retimed
-            passes.kept = limited.run(reference, q0, **kwargs)
-        passes.kept_ratio = peak_ratio(passes.kept, bounds)
-        passes.wall_time_s += passes.kept.wall_time_s
+    if limited.speed is not None:
+        _run_kept_with_limits(limited, passes, trajectory, q0, kwargs, bounds)
     return _finish(passes, bounds, limits, trajectory)
+
+
+def _run_kept_with_limits(
+    tracker: Tracker,
+    passes: _Passes,
+    trajectory: Trajectory,
+    q0: np.ndarray | Sequence[float] | None,
+    kwargs: dict[str, Any],
+    bounds: SpeedBounds,
+) -> None:
+    """Run the kept reference once more, with the law's own speed limits: the result."""
+    with warnings.catch_warnings():  # said once, by the first run
+        warnings.simplefilter("ignore", ReachWarning)
+        warnings.simplefilter("ignore", StabilityWarning)
+        reference = trajectory if passes.kept_retimed is None else passes.kept_retimed
+        passes.kept = tracker.run(reference, q0, **kwargs)
+    passes.kept_ratio = peak_ratio(passes.kept, bounds)
+    passes.wall_time_s += passes.kept.wall_time_s
 
 
 def _cannot_retime(

@@ -16,12 +16,10 @@ import pytest
 import clik
 from clik.constraints import ConstraintSet, Obstacle
 from clik.errors import InputError, JointNotFound
-from clik.speed.joint_speed import JointSpeed, SpeedLimitWarning
+from clik.loop.joint_speed import JointSpeed, SpeedLimitWarning
 from clik.trajectory import Hold, Line, PoseTrajectory
+from tests.joint_speed_runs import inside_run
 from tests.limits_check import assert_within_limits
-
-BALL = np.array([-0.16510938736458833, -0.18213995147107204, 0.6147820792812956])
-"""A 5 cm ball 2.12 cm from the Panda's link 4 at its ready pose (threshold 3 cm)."""
 
 ENGINES = ("python", "compiled")
 
@@ -34,27 +32,13 @@ def _speeds_within(result: clik.TrackingResult, rel: float = 1e-9) -> float:
     return ratio
 
 
-def _inside_run(panda, engine: str, joint_speed: JointSpeed | None = JointSpeed()):
-    task = clik.Task(panda, "panda_hand", "pose")
-    q0 = panda.q_reference
-    P = task.placement(q0)
-    cset = ConstraintSet(
-        panda, obstacles=[Obstacle("ball", "sphere", position=BALL, radius=0.05)],
-        obstacle_threshold=0.03,
-    )  # fmt: skip
-    tracker = clik.Tracker(
-        task, law="pseudoinverse", gain=1000.0, constraints=cset, engine=engine,
-        joint_speed=joint_speed,
-    )  # fmt: skip
-    return tracker.run(Hold(P.translation, P.rotation, 1.0), q0)
-
-
 @pytest.mark.parametrize("engine", ENGINES)
 def test_start_inside_a_threshold_recovers_within_the_speed_limits(panda, engine):
-    free = _inside_run(panda, engine, joint_speed=None)
+    free = inside_run(panda, engine, joint_speed=None)
     assert free.summary()["max_velocity_ratio"] > 5.0  # the jump the speed step removes
-    result = _inside_run(panda, engine)
+    result = inside_run(panda, engine)
     summary = result.summary()
+    assert summary["max_velocity_ratio"] == pytest.approx(1.0)  # at a limit, never above
     assert summary["max_velocity_ratio"] <= 1.0 + 1e-9
     assert _speeds_within(result) == pytest.approx(1.0)  # it did run at a limit
     # the row pushed the link out over several samples, then let go
@@ -69,7 +53,7 @@ def test_start_inside_a_threshold_recovers_within_the_speed_limits(panda, engine
 
 
 def test_engines_agree_while_the_limits_act(panda):
-    a, b = (_inside_run(panda, engine) for engine in ENGINES)
+    a, b = (inside_run(panda, engine) for engine in ENGINES)
     assert a.status == b.status
     assert a.events == b.events
     np.testing.assert_allclose(a.q, b.q, atol=1e-9)
@@ -203,8 +187,57 @@ def test_the_engine_refuses_bad_bounds(planar4r):
     line = Line(task.placement(q0).translation, [0.8, -0.2, 0.0], duration=0.1)
     for vmax in (np.ones(3), np.array([1.0, np.nan, 1.0, 1.0]), np.array([1.0, 0.0, 1.0, 1.0])):
         tracker.speed = type(tracker.speed)(  # type: ignore[misc]
-            tracker.speed.names, vmax, None, [], tracker.speed.settings  # type: ignore[union-attr]
+            tracker.speed.names,
+            vmax,
+            None,
+            [],
+            tracker.speed.settings,  # type: ignore[union-attr]
         )
         with pytest.raises(ValueError, match="vmax"):
             tracker.run(line, q0)
     assert LawConfig is not None
+
+
+def _scenario(tmp_path, table: str):
+    from clik.scenarios import scenario_path
+
+    text = scenario_path("case_study_unconstrained").read_text()
+    path = tmp_path / "s.toml"
+    path.write_text(text + "\n[constraints.joint_speed]\n" + table)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("table", "key"),
+    [
+        ("scale = 0\n", "constraints.joint_speed.scale"),
+        ("scale = 20\n", "constraints.joint_speed.scale"),
+        ("default_velocity = -1\n", "constraints.joint_speed.default_velocity"),
+        ("acceleration = 0\n", "constraints.joint_speed.acceleration"),
+        ('velocity = { joint1 = "fast" }\n', "constraints.joint_speed.velocity.joint1"),
+        ("enabled = 1\n", "constraints.joint_speed.enabled"),
+        ("speed = 1\n", "constraints.joint_speed"),
+        ("velocity = { nope = 1.0 }\n", "constraints.joint_speed.velocity"),
+        ("acceleration = { nope = 1.0 }\n", "constraints.joint_speed.acceleration"),
+    ],
+)
+def test_scenario_keys_are_checked(tmp_path, table, key):
+    from clik.errors import ScenarioError
+    from clik.scenarios.runner import build
+
+    with pytest.raises(ScenarioError) as info:
+        build(_scenario(tmp_path, table))
+    assert key in str(info.value)
+
+
+def test_scenario_turns_the_limits_off_or_scales_them(tmp_path):
+    from clik.scenarios.runner import build
+
+    off = build(_scenario(tmp_path, "enabled = false\n")).execute()
+    assert off.info["joint_speed"] is None
+    run = build(_scenario(tmp_path, "scale = 0.5\nacceleration = { joint1 = 50.0 }\n"))
+    result = run.execute()
+    info = result.info["joint_speed"]
+    assert info["velocity"] == [1.5, 1.5, 1.5, 1.5]
+    assert info["acceleration"][0] == 50.0 and info["acceleration"][1] is None
+    _speeds_within(result)

@@ -41,6 +41,10 @@ def test_zoo_obstacle_run(name: str) -> None:
     else:
         assert result.status in ("completed", "deadlock"), result.reason
     assert run.max_joint_step <= MAX_STEP, f"joint step {run.max_joint_step:.3g}"
+    ratio = result.summary()["max_velocity_ratio"]  # the law keeps every joint in its limit
+    assert ratio is None or ratio <= 1.0 + 1e-9, f"a joint at {ratio:.4g} x its speed limit"
+    bounds = np.array(result.info["joint_speed"]["velocity"])
+    assert np.all(np.abs(result.qdot) <= bounds * (1.0 + 1e-9))
     assert np.all(np.isfinite(result.q))
     if result.status == "completed":
         assert run.min_distance >= 0.0

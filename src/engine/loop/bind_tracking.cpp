@@ -225,8 +225,9 @@ void bind_configs(nb::module_& m) {
                     "LawConfig: rows >= 1 and K_task, 1 to 6 task gains");
             // vmax and amax are checked against the model where the run is built.
             SpeedBounds speed{vmax.value_or(Vec()), amax.value_or(Vec())};
-            new (self) LawConfig{LawSettings{law_kind(law), damping, dt, beta_max}, K_task, rows,
-                                 alpha, std::move(speed)};
+            const bool budget_blocks = speed.velocity.size() == 0;
+            new (self) LawConfig{LawSettings{law_kind(law), damping, dt, beta_max, budget_blocks},
+                                 K_task, rows, alpha, std::move(speed)};
           },
           nb::kw_only(), nb::arg("law"), nb::arg("damping"), nb::arg("dt"), nb::arg("beta_max"),
           nb::arg("K_task"), nb::arg("rows"), nb::arg("alpha"), nb::arg("vmax") = nb::none(),

@@ -91,7 +91,11 @@ class JointSpeed:
             raise InputError("joint_speed.enabled", "true or false", self.enabled)
         set_(self, "scale", _bound(self.scale, "joint_speed.scale", "", MAX_SCALE))
         unit = "[rad/s or m/s]"
-        set_(self, "default_velocity", _bound(self.default_velocity, "joint_speed.default_velocity", unit))
+        set_(
+            self,
+            "default_velocity",
+            _bound(self.default_velocity, "joint_speed.default_velocity", unit),
+        )
         if self.velocity is not None:
             set_(self, "velocity", _per_joint(self.velocity, "joint_speed.velocity", unit))
         acc, field, accel_unit = self.acceleration, "joint_speed.acceleration", "[rad/s^2 or m/s^2]"
