@@ -56,7 +56,9 @@ class Run:
     def execute(self, progress: ProgressCallback | None = None) -> TrackingResult:
         """Run the tracking loop (in re-timing passes when ``speed_limits`` is set)."""
         solver = self.scenario.solver
-        kwargs = {"record_every": solver["record_every"], "settle": solver["settle"]}
+        kwargs = {
+            key: solver[key] for key in ("record_every", "settle", "tolerance", "settling_time")
+        }
         if self.speed_limits is None:
             result = self.tracker.run(self.trajectory, self.q0, progress=progress, **kwargs)
         else:

@@ -120,7 +120,8 @@ def test_panda_pose_line(panda, law, record_every):
     trajectory = pose_line(task, panda.q_reference, [0.1, 0.05, -0.05], 1.0)
     gain = 100.0 if law == "pseudoinverse" else 20.0
     a, b = both(task, trajectory, law=law, gain=gain, record_every=record_every)
-    assert a.status == "completed"
+    # laws (9) and (8) at gain 20 lag 6.4 and 3.3 cm behind the line (measured): off track
+    assert a.status == ("completed" if law == "pseudoinverse" else "off_track")
     assert_same(a, b)
 
 

@@ -199,7 +199,16 @@ def test_start_inside_a_threshold_is_recovered_without_a_jump(planar4r):
     cset = ConstraintSet(planar4r, obstacles=[ball], obstacle_threshold=0.06)
     hold = Hold(position=task.placement(Q0).translation, duration=0.5)
     result = clik.track(task, hold, q0=Q0, law="pseudoinverse", constraints=cset)
-    assert result.status == "completed", result.reason
+    # the push out turns joint 2 at 7.6x its 3 rad/s limit (measured) unless the law
+    # bounds the joint speeds (info["joint_speed"], issue 23): not ``completed`` then
+    speed_bound = result.info.get("joint_speed") is not None
+    assert result.status == ("completed" if speed_bound else "velocity_limit"), result.reason
+    recovery = result.summary()["recovery"]
+    assert [r["constraint"] for r in recovery] == ["obstacle:ball:link2", "obstacle:ball:link3"]
+    for record in recovery:  # both links meet at the elbow, 4 cm from the ball
+        assert record["depth"] == pytest.approx(0.02, abs=1e-4)
+        assert record["recovered"] and 0.0 < record["duration"] < 0.5
+    assert "started inside the threshold of obstacle:ball:link2 (depth 20 mm)" in result.reason
     assert result.min_obstacle_distance[0] < 0.06 - 0.01
     assert result.min_obstacle_distance[-1] >= 0.06 - 1e-4
     assert np.abs(np.diff(result.q, axis=0)).max() <= 0.05
