@@ -41,9 +41,7 @@ def test_a_lag_mid_run_is_off_track(task, engine):
     """Law (9) at gain 50 lags up to 7.5 cm behind a 0.6 s line, then catches up."""
     p0 = task.placement(Q0).translation
     line = Line(p0, p0 + [0.3, 0.1, 0.0], 0.6)
-    result = clik.Tracker(task, law="transpose", gain=50.0, engine=engine).run(
-        line, Q0, settle=1.5
-    )
+    result = clik.Tracker(task, law="transpose", gain=50.0, engine=engine).run(line, Q0, settle=1.5)
     assert result.status == "off_track"
     assert result.final_task_error < 1e-5  # caught up by the end: the stretch counts
     assert result.reason.startswith("off_track: the task error stayed above the tolerance 0.01 m")
@@ -91,7 +89,8 @@ def test_case_study_dexterity_without_its_row_is_not_completed():
     tol = Tolerance()
     why = off_track(free, tol)
     assert why is not None and "with no constraint in conflict" in why
-    assert "for 1.21 s (t = 2.957 .. 4.164 s, largest 0.09586 m at t = 3.735 s)" in why  # 9.6 cm short of the reference out of reach
+    # the tip 9.6 cm short of the reference, out of reach
+    assert "for 1.21 s (t = 2.957 .. 4.164 s, largest 0.09586 m at t = 3.735 s)" in why
     if free.info.get("joint_speed") is None:  # joint 4 at 3.71 rad/s > 3: not bounded yet
         assert free.status == "velocity_limit"
         assert f"; also {why}" in free.reason
