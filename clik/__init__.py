@@ -35,6 +35,7 @@ from clik.errors import (
     ScenarioError,
     UnknownRobotError,
 )
+from clik.loop.joint_speed import JointSpeed, SpeedLimitWarning
 from clik.loop.tracker import ReachWarning, StabilityWarning, Tracker, track
 from clik.model.loading import ReferenceClippedWarning
 from clik.model.mimic import MimicJointWarning
@@ -42,7 +43,6 @@ from clik.model.robot import Robot
 from clik.outputs.result import TrackingResult
 from clik.solving.solve_mode import solve
 from clik.solving.solve_result import SolveResult
-from clik.loop.joint_speed import JointSpeed, SpeedLimitWarning
 from clik.speed.speed_limits import SpeedLimits
 from clik.speed.velocity_limits import track_within_limits
 from clik.tasks.task import Task

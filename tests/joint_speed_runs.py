@@ -11,8 +11,8 @@ import numpy as np
 
 import clik
 from clik.constraints import ConstraintSet, Obstacle
-from clik.loop.tracker import JOINT_SPEED
 from clik.loop.joint_speed import JointSpeed
+from clik.loop.tracker import JOINT_SPEED
 from clik.trajectory import Hold
 
 BALL = np.array([-0.16510938736458833, -0.18213995147107204, 0.6147820792812956])

@@ -22,14 +22,15 @@ from clik.constraints.constraint_set import ConstraintSet
 from clik.engine import ENGINES
 from clik.errors import InputError
 from clik.loop.gains import row_gains, stability_margin
+from clik.loop.joint_speed import JointSpeed, JointSpeedBounds
 from clik.loop.laws import LawName, check_law, nonlinear, prioritized, transpose
 from clik.loop.recording import bytes_per_sample, kept_samples
 from clik.loop.reference_stream import REFERENCE_CHUNK, ReferenceChunks
 from clik.loop.stop_checks import checked_settings
 from clik.loop.tracking import ProgressCallback, _Run
+from clik.loop.tracking_status import DEFAULT_SETTLING_TIME, DEFAULT_TOLERANCE, checked_tolerance
 from clik.model.reach import reach_bound
 from clik.outputs.result import TrackingResult
-from clik.loop.joint_speed import JointSpeed, JointSpeedBounds
 from clik.tasks.extended_task import ExtendedTask
 from clik.tasks.task import Task
 from clik.trajectory import Trajectory, time_grid
@@ -193,6 +194,8 @@ class Tracker:
         settle: float = 0.0,
         stall_window: float = 0.5,
         stall_progress: float = 0.01,
+        tolerance: tuple[float, float] = DEFAULT_TOLERANCE,
+        settling_time: float = DEFAULT_SETTLING_TIME,
     ) -> TrackingResult:
         """Track ``trajectory`` from ``q0`` (default: the robot's reference configuration).
 
@@ -223,6 +226,11 @@ class Tracker:
                 than ``stall_progress`` over this time [s] is a deadlock too; in the range
                 of ``deadlock_window``.
             stall_progress: See ``stall_window``: a fraction in [0, 1].
+            tolerance: Task error tolerance (position [m], orientation [rad]), each > 0:
+                a run that reached its end with its error above it for longer than
+                ``settling_time``, or at its last sample, is ``off_track``
+                (:mod:`clik.loop.tracking_status`).
+            settling_time: Longest time [s] the error may stay above ``tolerance``, > 0.
 
         Raises:
             InputError: A bad argument; or the robot's model changed after loading
@@ -244,11 +252,12 @@ class Tracker:
             deadlock_error=deadlock_error, max_joint_step=max_joint_step,
             stall_window=stall_window, stall_progress=stall_progress,
         )  # fmt: skip
+        tol = checked_tolerance(tolerance, settling_time)
         t = time_grid(duration + settle, self.dt)
         chunks, out_of_reach = self._reference(trajectory, t)
         self._warn_stability(q)
         every = min(int(record_every), t.shape[0])  # beyond N: the first and last samples
-        run = _Run(self, t, chunks, every, settings, progress)
+        run = _Run(self, t, chunks, every, settings, progress, tol)
         return run.execute(q, out_of_reach)
 
     def _check_run(

@@ -26,21 +26,23 @@ import numpy as np
 import pinocchio as pin
 
 from clik.constraints.constraint_run import ConstraintRun
+from clik.constraints.recovery import recovery_clause, recovery_records
 from clik.constraints.violations import JointRange, ViolationMonitor
 from clik.loop.compiled_run import compiled_samples
 from clik.loop.laws import finite
 from clik.loop.recording import Recorder
 from clik.loop.speed_step import SpeedStep
 from clik.loop.stop_checks import StopChecks, StopSettings
+from clik.loop.tracking_status import Tolerance, judge
 from clik.outputs.result import TrackingResult
 from clik.tasks.extended_task import ExtendedTask
 
 if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
+    from clik.loop.joint_speed import JointSpeedBounds
     from clik.loop.laws import LawName
     from clik.loop.reference_stream import ReferenceChunks
     from clik.model.robot import Robot
-    from clik.loop.joint_speed import JointSpeedBounds
     from clik.tasks.task import Task
 
 ProgressCallback = Callable[[int, int], None]
@@ -86,8 +88,10 @@ class _Run:
         record_every: int,
         settings: StopSettings,
         progress: ProgressCallback | None,
+        tolerance: Tolerance | None = None,
     ) -> None:
         self.tr = tracker
+        self.tolerance = Tolerance() if tolerance is None else tolerance
         self.task = task = tracker.task
         self.robot = robot = tracker.robot
         self.t, self.chunks, self.progress = t, chunks, progress
@@ -235,7 +239,12 @@ class _Run:
         if status != "completed" and out_of_reach:
             reason += f"; {out_of_reach}"
         status, reason = self._final_status(status, reason)
-        return self._result(status, reason, wall, self.steps, self.max_err, self.err)
+        result = self._result(status, reason, wall, self.steps, self.max_err, self.err)
+        records = [] if self.cset is None else recovery_records(result, self.cset, self.task)
+        judge(result, self.tolerance, records, recovery_clause(records))
+        if result.status != status and out_of_reach:  # off_track, velocity_limit
+            result.reason += f"; {out_of_reach}"
+        return result
 
     def samples(self, q: np.ndarray) -> tuple[str, str]:
         """The loop, one sample at a time (the specification of the compiled engine).

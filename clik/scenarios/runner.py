@@ -23,6 +23,7 @@ from clik.errors import (
     JointNotFound,
     ScenarioError,
 )
+from clik.loop.joint_speed import JointSpeed
 from clik.loop.tracker import Tracker
 from clik.loop.tracking import ProgressCallback
 from clik.model.reach import reach_bound
@@ -30,7 +31,6 @@ from clik.model.robot import Robot
 from clik.outputs.result import TrackingResult
 from clik.scenarios.scenario import Scenario, check_dt, load_scenario
 from clik.schema import Table
-from clik.loop.joint_speed import JointSpeed
 from clik.speed.speed_limits import SpeedLimits
 from clik.speed.velocity_limits import run_within_limits
 from clik.tasks.task import Task
@@ -57,7 +57,9 @@ class Run:
     def execute(self, progress: ProgressCallback | None = None) -> TrackingResult:
         """Run the tracking loop (in re-timing passes when ``speed_limits`` is set)."""
         solver = self.scenario.solver
-        kwargs = {"record_every": solver["record_every"], "settle": solver["settle"]}
+        kwargs = {
+            key: solver[key] for key in ("record_every", "settle", "tolerance", "settling_time")
+        }
         if self.speed_limits is None:
             result = self.tracker.run(self.trajectory, self.q0, progress=progress, **kwargs)
         else:

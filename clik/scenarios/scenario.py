@@ -40,6 +40,7 @@ from clik.errors import ScenarioError
 from clik.model.joints import JointValues
 from clik.model.xacro_expand import is_xacro
 from clik.scenarios.speed_tables import joint_speed_table, velocity_limits_table
+from clik.scenarios.tolerance import read_tolerance
 from clik.schema import (
     MAX_ANGLE,
     MAX_GAIN_DT,
@@ -219,6 +220,7 @@ def _solver(slv: Table, duration: float | None) -> dict[str, Any]:
         "record_every": slv.number("record_every", 1, minimum=1, integer=True),
         "settle": slv.number("settle", 0.0, minimum=0.0, unit="[s]"),
         "engine": slv.string("engine", "compiled", ENGINES),
+        **read_tolerance(slv),
     }
     if duration is not None:
         steps = (duration + solver["settle"]) / dt + 1

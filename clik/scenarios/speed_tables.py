@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from clik.schema import Table
 from clik.loop.joint_speed import MAX_SPEED_BOUND
+from clik.schema import Table
 from clik.speed.speed_limits import MAX_PASSES, MAX_SCALE
 
 SPEED_UNIT = "[rad/s or m/s]"

@@ -35,6 +35,7 @@ import numpy as np
 from clik.errors import InputError
 from clik.loop.tracker import ReachWarning, StabilityWarning, Tracker
 from clik.loop.tracking import ProgressCallback
+from clik.loop.tracking_status import RAN_TO_END  # a run that reached its end: re-timed
 from clik.speed.speed_limits import SpeedBounds, SpeedLimits
 from clik.speed.time_scaling import retime, slowdown
 
@@ -48,9 +49,6 @@ if TYPE_CHECKING:
 
 PROGRESS = 0.01
 """A pass must lower the largest ratio by this fraction of it, or re-timing stops."""
-
-RAN_TO_END = ("completed", "violated")
-"""Statuses of a run that reached the end of its trajectory (its record can be re-timed)."""
 
 
 @dataclass
@@ -88,6 +86,7 @@ def run_within_limits(
     record_every: int = 1,
     settle: float = 0.0,
     progress: ProgressCallback | None = None,
+    **run_settings: Any,
 ) -> TrackingResult:
     """Run ``tracker`` along ``trajectory``, re-timed until the joint speeds are within limits.
 
@@ -104,6 +103,8 @@ def run_within_limits(
         record_every: As :meth:`Tracker.run`; only recorded samples are compared.
         settle: As :meth:`Tracker.run` [s], after the stretched duration.
         progress: Called during the first run only.
+        **run_settings: Further :meth:`Tracker.run` arguments (``tolerance``,
+            ``settling_time``, ...), passed to every run.
 
     Returns:
         The run kept, its status ``velocity_limit`` when it ran to its end with its
@@ -114,7 +115,7 @@ def run_within_limits(
         InputError: A robot with no velocity limit and no acceleration limit given.
     """
     bounds = limits.bounds(tracker.robot)
-    kwargs: dict[str, Any] = {"record_every": record_every, "settle": settle}
+    kwargs: dict[str, Any] = {"record_every": record_every, "settle": settle, **run_settings}
     limited, tracker = tracker, tracker.without_speed_limits()  # passes: the law's own speeds
     result = tracker.run(trajectory, q0, progress=progress, **kwargs)
     ratio = peak_ratio(result, bounds)

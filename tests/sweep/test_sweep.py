@@ -762,7 +762,7 @@ def test_local_workers_do_not_profile(local_client):
 def test_status_line_and_what_fails_a_sweep(tmp_path):
     from clik.sweep.report import FAILED_STATUSES, SweepReport, status_line
 
-    assert FAILED_STATUSES == {"violated", "velocity_limit", "diverged"}
+    assert FAILED_STATUSES == {"violated", "velocity_limit", "off_track", "diverged"}
     counts = Counter({"violated": 1, "completed": 118, "deadlock": 1})
     assert status_line(counts) == "completed 118, deadlock 1, violated 1, raised 0"
     assert status_line(Counter({"error": 2, "diverged": 1})) == "diverged 1, raised 2"
