@@ -236,9 +236,7 @@ def prioritized(
         out_c: Where to write the constraint level's part ``qdot_c`` (n,) (0 without
             constraint rows), for the speed step (:mod:`clik.loop.speed_step`); or None.
         budget_blocks: Whether the task level's step budget counts in the returned
-            fraction (True: the paper's law, no speed limits); with the joint speed
-            limits the fraction is measured before it (docs/method.md, "Joint speed
-            limits in the law": a slowed demand is not a blocked one).
+            fraction (False with joint speed limits: a slowed demand is not blocked).
 
     Returns:
         The part of the task demand the law could not realise, ``|b - J qdot| / |b|``

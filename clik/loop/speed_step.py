@@ -69,6 +69,7 @@ class SpeedStep:
         if self.a_dt is not None:  # (S3)
             change = qdot - self.prev
             qdot[:] = self.prev + accel_scale(change, self.a_dt) * change
+        np.clip(qdot, -self.v, self.v, out=qdot)  # rounding: a joint at its bound, not 1 ulp past
         self.prev[:] = qdot
 
     def _within(self, qdot: np.ndarray) -> bool:

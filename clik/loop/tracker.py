@@ -387,6 +387,9 @@ def track(
     progress: ProgressCallback | None = None,
     engine: str = "compiled",
     joint_speed: JointSpeed | None = JOINT_SPEED,
+    settle: float = 0.0,
+    tolerance: tuple[float, float] = DEFAULT_TOLERANCE,
+    settling_time: float = DEFAULT_SETTLING_TIME,
 ) -> TrackingResult:
     """Track a Cartesian trajectory with a CLIK law (the one-call form of :class:`Tracker`).
 
@@ -403,4 +406,7 @@ def track(
         task, law=law, gain=gain, dt=dt, damping=damping, constraints=constraints, engine=engine,
         joint_speed=joint_speed,
     )  # fmt: skip
-    return tracker.run(trajectory, q0, record_every=record_every, progress=progress)
+    return tracker.run(
+        trajectory, q0, record_every=record_every, progress=progress, settle=settle,
+        tolerance=tolerance, settling_time=settling_time,
+    )  # fmt: skip

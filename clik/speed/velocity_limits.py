@@ -33,7 +33,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clik.errors import InputError
-from clik.loop.tracker import ReachWarning, StabilityWarning, Tracker
+from clik.loop.joint_speed import JointSpeed
+from clik.loop.tracker import JOINT_SPEED, ReachWarning, StabilityWarning, Tracker
 from clik.loop.tracking import ProgressCallback
 from clik.loop.tracking_status import RAN_TO_END  # a run that reached its end: re-timed
 from clik.speed.speed_limits import SpeedBounds, SpeedLimits
@@ -280,6 +281,7 @@ def track_within_limits(
     record_every: int = 1,
     progress: ProgressCallback | None = None,
     engine: str = "compiled",
+    joint_speed: JointSpeed | None = JOINT_SPEED,
 ) -> TrackingResult:
     """:func:`clik.track` that respects the joint speed limits (the same arguments).
 
@@ -297,6 +299,7 @@ def track_within_limits(
         record_every: Keep every k-th sample; only recorded samples are compared.
         progress: Called during the first run.
         engine: ``"compiled"`` or ``"python"``.
+        joint_speed: The joint speed limits the law keeps (the kept run's; None: none).
 
     Example:
         >>> limits = SpeedLimits(scale=0.8, acceleration=20.0)
@@ -304,8 +307,9 @@ def track_within_limits(
         >>> result.summary()["velocity_limits"]["stretched_duration_s"]
     """
     tracker = Tracker(
-        task, law=law, gain=gain, dt=dt, damping=damping, constraints=constraints, engine=engine
-    )
+        task, law=law, gain=gain, dt=dt, damping=damping, constraints=constraints, engine=engine,
+        joint_speed=joint_speed,
+    )  # fmt: skip
     limits = SpeedLimits() if velocity_limits is None else velocity_limits
     return run_within_limits(
         tracker, trajectory, q0, limits, record_every=record_every, progress=progress

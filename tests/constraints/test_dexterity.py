@@ -209,7 +209,8 @@ def test_pseudoinverse_law_holds_the_row(planar4r):
     assert_within_limits(held, planar4r)
     assert held.summary()["min_manipulability"] >= (1.0 - LAW10_TOLERANCE) * w_min
     assert free.summary()["min_manipulability"] < 0.85 * w_min  # measured 0.066
-    assert held.max_task_error < 1e-3
+    # bounded: joint 4 held at its 3 rad/s limit near the border slows the tip (1.13 mm)
+    assert held.max_task_error < (2e-3 if bounded else 1e-3)
     assert [e["action"] for e in held.events] == ["activate", "release"]
 
 

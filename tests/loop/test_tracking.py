@@ -127,9 +127,12 @@ def test_diverging_run_stops_with_status(panda):
     )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", StabilityWarning)
-        result = track(task, traj, law="transpose", gain=1e5, dt=1e-3)
+        result = track(task, traj, law="transpose", gain=1e5, dt=1e-3, joint_speed=None)
+        limited = track(task, traj, law="transpose", gain=1e5, dt=1e-3)
     assert result.status == "diverged"
     assert "in one step" in result.reason
+    # within the joint speed limits no step is that large: the stability check stops it
+    assert limited.status == "diverged" and "explicit Euler is unstable" in limited.reason
     assert np.all(np.isfinite(result.q))
 
 

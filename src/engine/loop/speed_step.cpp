@@ -89,6 +89,7 @@ void SpeedStep::apply(const ExtendedTask& ext, int r, const Vec* qdot_c, Eigen::
     t_ = qdot - prev_;
     qdot = prev_ + accel_scale(t_) * t_;
   }
+  qdot = qdot.cwiseMax(-v_).cwiseMin(v_);  // rounding: a joint at its bound, not 1 ulp past
   prev_ = qdot;
 }
 
