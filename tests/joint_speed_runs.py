@@ -1,8 +1,10 @@
-"""The start-inside-a-threshold run of issue 23, with and without the law's speed limits.
+"""Runs of issue 23, with and without the law's joint speed limits.
 
-A Panda pose hold for 1 s from its ready pose, a 5 cm ball 2.12 cm from link 4
-(threshold 3 cm), law (10) with gain 1000. ``python tests/joint_speed_runs.py`` prints
-the numbers the README quotes; :mod:`tests.loop.test_joint_speed` checks them.
+The start inside a threshold: a Panda pose hold for 1 s from its ready pose, a 5 cm ball
+2.12 cm from link 4 (threshold 3 cm), law (10) with gain 1000. The fast line: the
+Panda's hand 0.3 m along +y in 0.15 s and in 3 s (law (10), gain 100).
+``python tests/joint_speed_runs.py`` prints the numbers the README quotes;
+:mod:`tests.loop.test_joint_speed` checks them.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import clik
 from clik.constraints import ConstraintSet, Obstacle
 from clik.loop.joint_speed import JointSpeed
 from clik.loop.tracker import JOINT_SPEED
-from clik.trajectory import Hold
+from clik.trajectory import Hold, Line
 
 BALL = np.array([-0.16510938736458833, -0.18213995147107204, 0.6147820792812956])
 """The ball's centre [m]: 2.12 cm from the Panda's link 4 at its ready pose."""
@@ -37,6 +39,17 @@ def inside_run(
     return tracker.run(Hold(P.translation, P.rotation, 1.0), q0)
 
 
+def fast_line(
+    panda: clik.Robot, duration: float, joint_speed: JointSpeed | None
+) -> clik.TrackingResult:
+    """The hand 0.3 m along +y from the ready pose in ``duration`` [s], law (10), gain 100."""
+    task = clik.Task(panda, "panda_hand", "position")
+    start = task.placement(panda.q_reference).translation
+    line = Line(start, start + [0.0, 0.3, 0.0], duration=duration)
+    tracker = clik.Tracker(task, law="pseudoinverse", gain=100.0, joint_speed=joint_speed)
+    return tracker.run(line, panda.q_reference)
+
+
 if __name__ == "__main__":
     robot = clik.Robot.load("panda")
     for label, speed in (("without", None), ("with", JointSpeed())):
@@ -51,3 +64,11 @@ if __name__ == "__main__":
             f"{s.get('max_orientation_error', 0.0):.3g} rad; min distance at the end "
             f"{result.min_obstacle_distance[-1]:.4f} m"
         )
+    for duration in (0.15, 3.0):
+        for label, speed in (("without", None), ("with", JointSpeed())):
+            result = fast_line(robot, duration, speed)
+            print(
+                f"fast line in {duration:g} s, {label} the limits: {result.status}; max velocity "
+                f"ratio {result.summary()['max_velocity_ratio']:.3g}; max error "
+                f"{result.max_task_error:.3g} m, final {result.final_task_error:.3g} m"
+            )

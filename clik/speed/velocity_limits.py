@@ -126,12 +126,8 @@ def run_within_limits(
         passes.stop = _cannot_retime(result, trajectory, passes, limits)
         if passes.stop:
             break
-        factor = slowdown(
-            bounds.ratio(result.qdot, result.qddot),
-            tracker.dt * record_every,
-            passes.window,
-            limits.margin,
-        )
+        r_k = bounds.ratio(result.qdot, result.qddot)
+        factor = slowdown(r_k, tracker.dt * record_every, passes.window, limits.margin)
         retimed = retime(trajectory, retimed, result.t, factor, tracker.dt)
         try:  # the stretched run within the step and record budgets
             tracker.check_size(retimed.duration + settle, record_every)
@@ -156,8 +152,7 @@ def run_within_limits(
                 "correction K e of a start far from the reference), which time scaling "
                 "cannot slow"
             )
-        else:
-            ratio = new
+        ratio = new if new <= ratio * (1.0 - PROGRESS) else ratio
     if limited.speed is not None:
         _run_kept_with_limits(limited, passes, trajectory, q0, kwargs, bounds)
     return _finish(passes, bounds, limits, trajectory)
