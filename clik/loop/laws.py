@@ -258,17 +258,16 @@ def prioritized(
         rest = b_task - J.dot(qdot_c)
         qdot_t = JN.T.dot(damped_solve(JN.dot(JN.T), rest, epsilon, damping))
     else:
-        qdot_c = np.zeros(out.shape[0])
+        qdot_c = None
         qdot_t = J.T.dot(damped_solve(J.dot(J.T), b_task, epsilon, damping))
     if out_c is not None:
-        out_c[:] = qdot_c
-    if budget_blocks:
-        np.add(qdot_c, _within_budget(qdot_t, dt), out=out)
-        return _unrealised(J, b_task, out)
-    np.add(qdot_c, qdot_t, out=out)
-    blocked = _unrealised(J, b_task, out)
-    np.add(qdot_c, _within_budget(qdot_t, dt), out=out)
-    return blocked
+        out_c[:] = 0.0 if qdot_c is None else qdot_c
+    blocked = 0.0
+    if not budget_blocks:  # measured on the law's own demand, before the budget
+        blocked = _unrealised(J, b_task, qdot_t if qdot_c is None else qdot_c + qdot_t)
+    _within_budget(qdot_t, dt)
+    out[:] = qdot_t if qdot_c is None else qdot_c + qdot_t
+    return _unrealised(J, b_task, out) if budget_blocks else blocked
 
 
 def _unrealised(J: np.ndarray, b: np.ndarray, qdot: np.ndarray) -> float:

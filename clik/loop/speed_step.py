@@ -54,10 +54,13 @@ class SpeedStep:
             pseudoinverse: Law (10), whose constraint part is already in :attr:`c`
                 (:func:`clik.loop.laws.prioritized`); else it is ``J_c^T K_c e_c``.
         """
-        if not np.isfinite(qdot).all():  # the divergence check stops it: nothing to bound
-            return
-        if self._within(qdot):
+        if self.a_dt is None:
+            if (np.abs(qdot) <= self.v).all():  # within the limits: the law's own (NaN: not)
+                return
+        elif self._within(qdot):
             self.prev[:] = qdot
+            return
+        if not np.isfinite(qdot).all():  # the divergence check stops it: nothing to bound
             return
         c = self.c
         if not pseudoinverse:
@@ -70,13 +73,14 @@ class SpeedStep:
             change = qdot - self.prev
             qdot[:] = self.prev + accel_scale(change, self.a_dt) * change
         np.clip(qdot, -self.v, self.v, out=qdot)  # rounding: a joint at its bound, not 1 ulp past
-        self.prev[:] = qdot
+        if self.a_dt is not None:
+            self.prev[:] = qdot
 
     def _within(self, qdot: np.ndarray) -> bool:
-        """Whether ``qdot`` is in the speed box and, with acceleration limits, its change too."""
+        """Whether ``qdot`` is in the speed box and its change within the acceleration bound."""
         if not bool(np.all(np.abs(qdot) <= self.v)):
             return False
-        return self.a_dt is None or bool(np.all(np.abs(qdot - self.prev) <= self.a_dt))
+        return bool(np.all(np.abs(qdot - self.prev) <= self.a_dt))
 
     def box_scale(self, c: np.ndarray) -> float:
         """(S1): ``min(1, min_i v_i / |c_i|)``."""
