@@ -104,6 +104,8 @@ def recovery_records(
     """
     if result.t.shape[0] == 0:
         return []
+    if not any(e["t"] == result.t[0] for e in result.events):  # nothing (de)activated at the
+        return []  # start: no threshold was violated then (a violated one activates or skips)
     check = PoseCheck(cset, task)
     start = check.violations(result.q[0])
     keys = _started_inside(result)

@@ -50,6 +50,14 @@ def test_start_inside_a_threshold_recovers_within_the_speed_limits(panda, engine
     assert result.status == "completed", result.reason
     assert_within_limits(result, panda)
     assert result.max_task_error < 0.005  # the hand leaves its reference by millimetres
+    # the recovery is reported: which constraint, how deep, how long, within the limits
+    (recovery,) = summary["recovery"]
+    assert recovery["constraint"] == "obstacle:ball:panda_link4" and recovery["recovered"]
+    assert recovery["depth"] == pytest.approx(0.03 - 0.0212, abs=1e-6)
+    assert recovery["duration"] == pytest.approx(release[0])
+    assert f"recovered in {release[0]:g} s" in result.reason
+    limited = {r["joint"] for r in summary["speed_limited"]}
+    assert "panda_joint1" in limited and summary["speed_limited_time"] > 0.0
 
 
 def test_engines_agree_while_the_limits_act(panda):
