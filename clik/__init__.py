@@ -35,6 +35,7 @@ from clik.errors import (
     ScenarioError,
     UnknownRobotError,
 )
+from clik.loop.joint_speed import JointSpeed, SpeedLimitWarning
 from clik.loop.tracker import ReachWarning, StabilityWarning, Tracker, track
 from clik.model.loading import ReferenceClippedWarning
 from clik.model.mimic import MimicJointWarning
@@ -55,6 +56,7 @@ __all__ = [
     "InfeasibleError",
     "InputError",
     "JointNotFound",
+    "JointSpeed",
     "MimicJointWarning",
     "OutputError",
     "OutputExistsError",
@@ -65,6 +67,7 @@ __all__ = [
     "RobotLoadError",
     "ScenarioError",
     "SolveResult",
+    "SpeedLimitWarning",
     "SpeedLimits",
     "StabilityWarning",
     "Task",

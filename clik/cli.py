@@ -2,10 +2,10 @@
 
 Errors are printed without a traceback (``--debug`` shows it) and the exit
 code tells the kind: 0 success, 1 a sweep with failed runs (``clik sweep``:
-a run raised, or ended ``violated``, ``velocity_limit`` or ``diverged``; every
-row is still written), 2 bad input, 3 infeasible (the run ended ``violated``,
-``velocity_limit``, ``deadlock`` or ``diverged``; its outputs are still
-written), 4 internal; 130 after Ctrl-C, 143 after SIGTERM (the output folder is
+a run raised, or ended ``violated``, ``velocity_limit``, ``off_track`` or
+``diverged``; every row is still written), 2 bad input, 3 infeasible (the run ended
+``violated``, ``velocity_limit``, ``off_track``, ``deadlock`` or ``diverged``; its
+outputs are still written), 4 internal; 130 after Ctrl-C, 143 after SIGTERM (the output folder is
 then left as it was: :mod:`clik.outputs.out_folder`), 141 when stdout is closed early
 (``clik robots | head -1``: quietly, like a process stopped by SIGPIPE).
 """

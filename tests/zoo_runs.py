@@ -48,11 +48,19 @@ def zoo_run(name: str, direction: np.ndarray = DIRECTION) -> ZooRun:
 
 
 if __name__ == "__main__":
-    print("| robot | status | min distance [m] | max joint step [rad] |")
-    print("|---|---|---|---|")
+    print(
+        "| robot | status | max velocity ratio | max task error [m] | min distance [m] "
+        "| max joint step [rad] |"
+    )
+    print("|---|---|---|---|---|---|")
     for name in sorted(clik.Robot.available()):
         run = zoo_run(name)
         if run.result is None:
-            print(f"| {name} | not run: {run.status} | - | - |")
+            print(f"| {name} | not run: {run.status} | - | - | - | - |")
         else:
-            print(f"| {name} | {run.status} | {run.min_distance:.4f} | {run.max_joint_step:.4f} |")
+            ratio = run.result.summary()["max_velocity_ratio"]
+            shown = "no limits" if ratio is None else f"{ratio:.4f}"
+            print(
+                f"| {name} | {run.status} | {shown} | {run.result.max_task_error:.4g} "
+                f"| {run.min_distance:.4f} | {run.max_joint_step:.4f} |"
+            )

@@ -152,11 +152,12 @@ def add_solve(sub: Any) -> None:
     )
     s.add_argument(
         "--export",
+        action="extend",  # repeatable: --export csv --export json is --export csv json
         nargs="+",
         choices=FORMATS,
         metavar="FORMAT",
         help="also write the joint trajectory for a controller: csv (DIR/trajectory.csv), "
-        "json (DIR/trajectory.json, a ROS JointTrajectory), or both",
+        "json (DIR/trajectory.json, a ROS JointTrajectory), or both (repeatable)",
     )
     s.add_argument(
         "--export-every",

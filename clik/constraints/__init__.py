@@ -22,6 +22,8 @@ and one C++ type; the core (:class:`ConstraintRun`) never names a kind:
 - :class:`CollisionScene`: link geometry (convex) and obstacles, with pruning; each
   run places it in its own :class:`~clik.constraints.collision_scene.SceneRun`.
 - :class:`ConstraintSet`: activation, release, the ``n - m`` bound (22), events.
+- :mod:`~clik.constraints.pose_check`: is one configuration clear of its constraints
+  (solve mode; :mod:`~clik.constraints.recovery`: a run that started inside a threshold).
 - :class:`~clik.constraints.read_only.ReadOnlyList`: the read-only sequences a set and
   its kinds show (``cset.obstacles``): a set changes only through its methods.
 """

@@ -69,7 +69,7 @@ class Violation:
 class PoseCheck(Protocol):
     """What a kind's check of one configuration reads.
 
-    :class:`clik.solving.pose_check.PoseCheck` is the one clik uses.
+    :class:`clik.constraints.pose_check.PoseCheck` is the one clik uses.
     """
 
     scene: CollisionScene | None

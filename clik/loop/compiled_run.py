@@ -126,10 +126,16 @@ def _task_config(engine: Any, task: Task) -> Any:
 
 
 def _law_config(engine: Any, tr: Any) -> Any:
-    """The tracker's law, gains and rows as ``_engine.LawConfig``."""
+    """The tracker's law, gains, rows and joint speed limits as ``_engine.LawConfig``."""
+    speed = tr.speed
+    vmax = None if speed is None else np.asarray(speed.velocity, dtype=float)
+    amax = None
+    if speed is not None and speed.acceleration is not None:
+        amax = np.asarray(speed.acceleration, dtype=float)
     return engine.LawConfig(
         law=tr.law, damping=float(tr.damping), dt=float(tr.dt), beta_max=float(tr.beta_max),
         K_task=np.asarray(tr.K_task, dtype=float), rows=int(tr.rows), alpha=float(tr.alpha),
+        vmax=vmax, amax=amax,
     )  # fmt: skip
 
 

@@ -197,6 +197,8 @@ def prioritized(
     out: np.ndarray,
     damping: float,
     dt: float,
+    out_c: np.ndarray | None = None,
+    budget_blocks: bool = True,
 ) -> float:
     r"""Law (10) on the extended task, constraints first and the task in their null space.
 
@@ -231,6 +233,10 @@ def prioritized(
         out: Joint velocity output (n,) [rad/s].
         damping: The user's constant damping ``lambda_0`` (0: none).
         dt: Sample time [s].
+        out_c: Where to write the constraint level's part ``qdot_c`` (n,) (0 without
+            constraint rows), for the speed step (:mod:`clik.loop.speed_step`); or None.
+        budget_blocks: Whether the task level's step budget counts in the returned
+            fraction (False with joint speed limits: a slowed demand is not blocked).
 
     Returns:
         The part of the task demand the law could not realise, ``|b - J qdot| / |b|``
@@ -250,11 +256,23 @@ def prioritized(
         rows = Vt[sv > RANK_TOLERANCE * max(scale, 1.0)]  # a duplicated row adds no direction
         JN = J - J.dot(rows.T).dot(rows)
         rest = b_task - J.dot(qdot_c)
-        qdot_t = _within_budget(JN.T.dot(damped_solve(JN.dot(JN.T), rest, epsilon, damping)), dt)
-        np.add(qdot_c, qdot_t, out=out)
+        qdot_t = JN.T.dot(damped_solve(JN.dot(JN.T), rest, epsilon, damping))
     else:
-        out[:] = _within_budget(J.T.dot(damped_solve(J.dot(J.T), b_task, epsilon, damping)), dt)
-    demand = float(np.linalg.norm(b_task))
+        qdot_c = None
+        qdot_t = J.T.dot(damped_solve(J.dot(J.T), b_task, epsilon, damping))
+    if out_c is not None:
+        out_c[:] = 0.0 if qdot_c is None else qdot_c
+    blocked = 0.0
+    if not budget_blocks:  # measured on the law's own demand, before the budget
+        blocked = _unrealised(J, b_task, qdot_t if qdot_c is None else qdot_c + qdot_t)
+    _within_budget(qdot_t, dt)
+    out[:] = qdot_t if qdot_c is None else qdot_c + qdot_t
+    return _unrealised(J, b_task, out) if budget_blocks else blocked
+
+
+def _unrealised(J: np.ndarray, b: np.ndarray, qdot: np.ndarray) -> float:
+    """``|b - J qdot| / |b|``: the part of the task's demand ``qdot`` does not realise."""
+    demand = float(np.linalg.norm(b))
     if demand == 0.0:
         return 0.0
-    return float(np.linalg.norm(b_task - J.dot(out))) / demand
+    return float(np.linalg.norm(b - J.dot(qdot))) / demand

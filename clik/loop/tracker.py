@@ -10,6 +10,7 @@ bound at ``q0`` (:class:`StabilityWarning`); the run itself, sample by sample, i
 
 from __future__ import annotations
 
+import copy
 import math
 import warnings
 from collections.abc import Sequence
@@ -21,16 +22,21 @@ from clik.constraints.constraint_set import ConstraintSet
 from clik.engine import ENGINES
 from clik.errors import InputError
 from clik.loop.gains import row_gains, stability_margin
+from clik.loop.joint_speed import JointSpeed, JointSpeedBounds
 from clik.loop.laws import LawName, check_law, nonlinear, prioritized, transpose
 from clik.loop.recording import bytes_per_sample, kept_samples
 from clik.loop.reference_stream import REFERENCE_CHUNK, ReferenceChunks
 from clik.loop.stop_checks import checked_settings
 from clik.loop.tracking import ProgressCallback, _Run
+from clik.loop.tracking_status import DEFAULT_SETTLING_TIME, DEFAULT_TOLERANCE, checked_tolerance
 from clik.model.reach import reach_bound
 from clik.outputs.result import TrackingResult
 from clik.tasks.extended_task import ExtendedTask
 from clik.tasks.task import Task
 from clik.trajectory import Trajectory, time_grid
+
+JOINT_SPEED = JointSpeed()
+"""The default: the law keeps every joint within its URDF velocity limit."""
 
 
 class ReachWarning(UserWarning):
@@ -78,10 +84,18 @@ class Tracker:
             ``"python"`` (the loop of :mod:`clik.loop.tracking`, the engine's readable
             specification).
             Both give the same statuses, events and joint trajectories.
+        joint_speed: Joint speed (and acceleration) limits the law keeps at every
+            sample (:class:`~clik.loop.joint_speed.JointSpeed`, docs/method.md "Joint
+            speed limits in the law"); default: every joint within its URDF velocity
+            limit. None (or ``JointSpeed(enabled=False)``): no limit in the law.
 
     Raises:
         InputError: A bad setting (named); ``constraints`` not a ``ConstraintSet`` built
             on the task's robot; or the robot's model changed after loading.
+        JointNotFound: A per-joint speed limit for a joint the robot does not have.
+
+    Warns:
+        SpeedLimitWarning: Joints without a URDF velocity limit (``default_velocity``).
     """
 
     def __init__(
@@ -94,6 +108,7 @@ class Tracker:
         beta_max: float | None = None,
         constraints: ConstraintSet | None = None,
         engine: str = "compiled",
+        joint_speed: JointSpeed | None = JOINT_SPEED,
     ) -> None:
         if engine not in ENGINES:
             raise InputError("engine", " or ".join(repr(e) for e in ENGINES), engine)
@@ -122,11 +137,28 @@ class Tracker:
         m = task.m
         limit = constraints.row_limit(m, self.law) if constraints is not None else 0
         self.rows = m + limit
+        if joint_speed is not None and not isinstance(joint_speed, JointSpeed):
+            raise InputError("joint_speed", "a clik.JointSpeed or None", type(joint_speed).__name__)
+        self.joint_speed = joint_speed
+        self.speed: JointSpeedBounds | None = (
+            None if joint_speed is None else joint_speed.bounds(self.robot)
+        )
+        """The bounds the law keeps every joint within (None: no speed limit in the law)."""
+
+    def without_speed_limits(self) -> Tracker:
+        """A copy of this tracker whose law keeps no joint speed limit (re-timing passes)."""
+        other = copy.copy(self)
+        other.joint_speed, other.speed = None, None
+        return other
 
     # -- the law -----------------------------------------------------------------------
 
-    def law_velocity(self, ext: ExtendedTask, r: int, out: np.ndarray) -> float:
+    def law_velocity(
+        self, ext: ExtendedTask, r: int, out: np.ndarray, out_c: np.ndarray | None = None
+    ) -> float:
         """Joint velocity [rad/s] of the law on the first ``r`` rows of the extended task.
+
+        ``out_c``: law (10) writes its constraint level's part there (for the speed step).
 
         Returns:
             Law (10): the fraction of the task's demand the law could not realise
@@ -135,7 +167,10 @@ class Tracker:
         m = ext.m
         if self.law == "pseudoinverse":
             b = ext.demand(r, ext.demand_out[:r])
-            return prioritized(ext.J[:m], b[:m], ext.J[m:r], b[m:r], out, self.damping, self.dt)
+            return prioritized(
+                ext.J[:m], b[:m], ext.J[m:r], b[m:r], out, self.damping, self.dt, out_c,
+                budget_blocks=self.speed is None,
+            )  # fmt: skip
         J, e, K, ff, work = ext.J[:r], ext.e[:r], ext.K[:r], ext.ff[:r], ext.work[:r]
         if self.law == "transpose":
             transpose(J, e, K, ff, out, work)
@@ -159,6 +194,8 @@ class Tracker:
         settle: float = 0.0,
         stall_window: float = 0.5,
         stall_progress: float = 0.01,
+        tolerance: tuple[float, float] = DEFAULT_TOLERANCE,
+        settling_time: float = DEFAULT_SETTLING_TIME,
     ) -> TrackingResult:
         """Track ``trajectory`` from ``q0`` (default: the robot's reference configuration).
 
@@ -189,6 +226,11 @@ class Tracker:
                 than ``stall_progress`` over this time [s] is a deadlock too; in the range
                 of ``deadlock_window``.
             stall_progress: See ``stall_window``: a fraction in [0, 1].
+            tolerance: Task error tolerance (position [m], orientation [rad]), each > 0:
+                a run that reached its end with its error above it for longer than
+                ``settling_time``, or at its last sample, is ``off_track``
+                (:mod:`clik.loop.tracking_status`).
+            settling_time: Longest time [s] the error may stay above ``tolerance``, > 0.
 
         Raises:
             InputError: A bad argument; or the robot's model changed after loading
@@ -210,11 +252,12 @@ class Tracker:
             deadlock_error=deadlock_error, max_joint_step=max_joint_step,
             stall_window=stall_window, stall_progress=stall_progress,
         )  # fmt: skip
+        tol = checked_tolerance(tolerance, settling_time)
         t = time_grid(duration + settle, self.dt)
         chunks, out_of_reach = self._reference(trajectory, t)
         self._warn_stability(q)
         every = min(int(record_every), t.shape[0])  # beyond N: the first and last samples
-        run = _Run(self, t, chunks, every, settings, progress)
+        run = _Run(self, t, chunks, every, settings, progress, tol)
         return run.execute(q, out_of_reach)
 
     def _check_run(
@@ -343,6 +386,10 @@ def track(
     record_every: int = 1,
     progress: ProgressCallback | None = None,
     engine: str = "compiled",
+    joint_speed: JointSpeed | None = JOINT_SPEED,
+    settle: float = 0.0,
+    tolerance: tuple[float, float] = DEFAULT_TOLERANCE,
+    settling_time: float = DEFAULT_SETTLING_TIME,
 ) -> TrackingResult:
     """Track a Cartesian trajectory with a CLIK law (the one-call form of :class:`Tracker`).
 
@@ -356,6 +403,10 @@ def track(
         >>> result = clik.track(task, clik.trajectory.Line(...), q0=q0)
     """
     tracker = Tracker(
-        task, law=law, gain=gain, dt=dt, damping=damping, constraints=constraints, engine=engine
-    )
-    return tracker.run(trajectory, q0, record_every=record_every, progress=progress)
+        task, law=law, gain=gain, dt=dt, damping=damping, constraints=constraints, engine=engine,
+        joint_speed=joint_speed,
+    )  # fmt: skip
+    return tracker.run(
+        trajectory, q0, record_every=record_every, progress=progress, settle=settle,
+        tolerance=tolerance, settling_time=settling_time,
+    )  # fmt: skip

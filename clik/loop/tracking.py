@@ -5,7 +5,8 @@ One iteration per sample (docs/method.md, "Discrete time"), each a short step:
 1. kinematics: the frame's placement and Jacobian at ``q_k`` (3);
 2. task error ``e_k = x_d(t_k) - x(q_k)`` (6) on the task's rows;
 3. constraint rows (13)-(19) into the extended task (24)-(25);
-4. the law, (9), (8) or (10), gives ``qdot_k``;
+4. the law, (9), (8) or (10), gives ``qdot_k``, within the joint speed limits
+   (S1)-(S3) (:mod:`clik.loop.speed_step`);
 5. stop checks (divergence, instability, deadlock) and limits crossed (violations);
 6. recording, then ``q_{k+1} = q_k (+) qdot_k dt`` (``pin.integrate``).
 
@@ -25,16 +26,20 @@ import numpy as np
 import pinocchio as pin
 
 from clik.constraints.constraint_run import ConstraintRun
+from clik.constraints.recovery import recovery_clause, recovery_records
 from clik.constraints.violations import JointRange, ViolationMonitor
 from clik.loop.compiled_run import compiled_samples
 from clik.loop.laws import finite
 from clik.loop.recording import Recorder
+from clik.loop.speed_step import SpeedStep
 from clik.loop.stop_checks import StopChecks, StopSettings
+from clik.loop.tracking_status import Tolerance, judge
 from clik.outputs.result import TrackingResult
 from clik.tasks.extended_task import ExtendedTask
 
 if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
+    from clik.loop.joint_speed import JointSpeedBounds
     from clik.loop.laws import LawName
     from clik.loop.reference_stream import ReferenceChunks
     from clik.model.robot import Robot
@@ -57,8 +62,11 @@ class TrackerSettings(Protocol):
     beta_max: float
     rows: int
     constraints: ConstraintSet | None
+    speed: JointSpeedBounds | None
 
-    def law_velocity(self, ext: ExtendedTask, r: int, out: np.ndarray) -> float: ...  # noqa: D102
+    def law_velocity(  # noqa: D102
+        self, ext: ExtendedTask, r: int, out: np.ndarray, out_c: np.ndarray | None = None
+    ) -> float: ...
 
 
 class _Run:
@@ -80,8 +88,10 @@ class _Run:
         record_every: int,
         settings: StopSettings,
         progress: ProgressCallback | None,
+        tolerance: Tolerance | None = None,
     ) -> None:
         self.tr = tracker
+        self.tolerance = Tolerance() if tolerance is None else tolerance
         self.task = task = tracker.task
         self.robot = robot = tracker.robot
         self.t, self.chunks, self.progress = t, chunks, progress
@@ -104,6 +114,9 @@ class _Run:
                 cset, m, tracker.law, tracker.alpha, t, self.rec.capacity, task.frame_id,
                 task.rows, self.data,
             )  # fmt: skip
+        self.speed_step: SpeedStep | None = None  # the compiled engine's is in C++
+        if tracker.speed is not None and python:
+            self.speed_step = SpeedStep(tracker.speed, self.dt)
         self.monitor = ViolationMonitor(_joint_range(robot, cset))
         self.checks = StopChecks(settings, tracker.law, self.dt)
         self.e6 = np.zeros(6)
@@ -114,7 +127,13 @@ class _Run:
 
     def law(self, r: int, out: np.ndarray) -> float:
         """The tracker's law on the first ``r`` rows of this run's extended task."""
-        return self.tr.law_velocity(self.ext, r, out)
+        step = self.speed_step
+        return self.tr.law_velocity(self.ext, r, out, None if step is None else step.c)
+
+    def within_speed_limits(self, r: int, qdot: np.ndarray) -> None:
+        """The law's ``qdot`` within the joint speed limits, (S1)-(S3), when the run has them."""
+        if self.speed_step is not None:
+            self.speed_step.apply(qdot, self.ext, r, self.tr.law == "pseudoinverse")
 
     # -- one sample, in steps ----------------------------------------------------------
 
@@ -220,7 +239,12 @@ class _Run:
         if status != "completed" and out_of_reach:
             reason += f"; {out_of_reach}"
         status, reason = self._final_status(status, reason)
-        return self._result(status, reason, wall, self.steps, self.max_err, self.err)
+        result = self._result(status, reason, wall, self.steps, self.max_err, self.err)
+        records = [] if self.cset is None else recovery_records(result, self.cset, self.task)
+        judge(result, self.tolerance, records, recovery_clause(records))
+        if result.status != status and out_of_reach:  # off_track, velocity_limit
+            result.reason += f"; {out_of_reach}"
+        return result
 
     def samples(self, q: np.ndarray) -> tuple[str, str]:
         """The loop, one sample at a time (the specification of the compiled engine).
@@ -244,6 +268,7 @@ class _Run:
             exact = rec.due(k)
             r = m if crun is None else m + crun.update(k, q, self.ext, self.law, exact)
             blocked = self.law(r, qdot)
+            self.within_speed_limits(r, qdot)
             self.err, err_rot = self.error_norms()
             self.max_err = max(self.max_err, self.err)
             stop = self.stop(k, qdot, self.err, r, blocked, bool(at_rest[kk]))
@@ -303,6 +328,7 @@ class _Run:
             "record_every": self.rec.every,
             "duration": float(self.chunks.trajectory.duration),
             "stability_margin_max": float(self.checks.worst_margin),
+            "joint_speed": None if tr.speed is None else tr.speed.as_info(),
         }
         result = TrackingResult(
             t=self.t[self.rec.idx[: self.rec.j]],

@@ -25,6 +25,7 @@ from clik.outputs.export import (
     write_trajectory,
 )
 from clik.outputs.io import atomic_write, json_safe, json_text
+from clik.outputs.speed_record import max_acceleration_ratio, speed_limited
 from clik.outputs.velocity_report import VelocityLimits, model_velocity_limits, velocity_report
 from clik.tasks.manipulability import manipulability_record, min_manipulability
 
@@ -35,20 +36,25 @@ STATUSES = (
     "completed",
     "violated",
     "velocity_limit",
+    "off_track",
     "deadlock",
     "diverged",
     "converged",
     "max_iterations",
 )
-"""Run statuses: ``completed`` (reached the end of the trajectory with no limit crossed),
-``violated`` (reached the end, but a constraint's limit was crossed: see ``violations``),
-``velocity_limit`` (reached the end with ``velocity_limits`` enabled, but a joint's speed
-stayed above its limit after re-timing: see :mod:`clik.speed.velocity_limits`), ``deadlock``
+"""Run statuses: ``completed`` (reached the end of the trajectory, tracked within the
+tolerance, no limit crossed, no joint above its speed limit), ``violated`` (reached the
+end, but a constraint's limit was crossed: see ``violations``), ``velocity_limit``
+(reached the end with a joint above its speed limit: the law's bound, else the URDF's;
+or, with ``velocity_limits`` enabled, still above after re-timing: see
+:mod:`clik.speed.velocity_limits`), ``off_track`` (reached the end, but the task error
+stayed above the tolerance for longer than the settling time, or ended above it: see
+:mod:`clik.loop.tracking_status`), ``deadlock``
 (Remark 2: the law cannot reduce the task error, e.g. the task and the constraints
 conflict), ``diverged`` (a non-finite value, a joint step above the bound, or unstable
 gains), and for solve mode ``converged`` / ``max_iterations``."""
 
-FAILED_STATUSES = ("violated", "velocity_limit", "deadlock", "diverged")
+FAILED_STATUSES = ("violated", "velocity_limit", "off_track", "deadlock", "diverged")
 """Statuses of a run that did not do what was asked (``clik solve`` exits with 3)."""
 
 _ARRAYS = (
@@ -156,6 +162,12 @@ class TrackingResult:
         )
         summary["max_velocity_ratio"] = speeds.max_velocity_ratio
         summary["velocity"] = speeds.records
+        names = self.velocity_limits.names if self.velocity_limits is not None else []
+        limited, limited_time = speed_limited(self.t, self.qdot, names, self.info)
+        summary["speed_limited"] = limited
+        summary["speed_limited_time"] = limited_time
+        summary["max_acceleration_ratio"] = max_acceleration_ratio(self.qddot, self.info)
+        summary["recovery"] = []  # filled from summary_extra for a start inside a threshold
         summary["min_manipulability"] = min_manipulability(self)
         summary.update(self.info.get("summary_extra", {}))
         summary["info"] = {k: v for k, v in self.info.items() if k != "summary_extra"}

@@ -23,6 +23,7 @@ from clik.errors import (
     JointNotFound,
     ScenarioError,
 )
+from clik.loop.joint_speed import JointSpeed
 from clik.loop.tracker import Tracker
 from clik.loop.tracking import ProgressCallback
 from clik.model.reach import reach_bound
@@ -56,7 +57,9 @@ class Run:
     def execute(self, progress: ProgressCallback | None = None) -> TrackingResult:
         """Run the tracking loop (in re-timing passes when ``speed_limits`` is set)."""
         solver = self.scenario.solver
-        kwargs = {"record_every": solver["record_every"], "settle": solver["settle"]}
+        kwargs = {
+            key: solver[key] for key in ("record_every", "settle", "tolerance", "settling_time")
+        }
         if self.speed_limits is None:
             result = self.tracker.run(self.trajectory, self.q0, progress=progress, **kwargs)
         else:
@@ -158,8 +161,13 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
             damping=solver["damping"],
             constraints=constraints,
             engine=solver["engine"],
+            joint_speed=_joint_speed(scenario),
         )
+    except JointNotFound as exc:
+        raise _where(scenario, _joint_speed_key(scenario, exc.name), exc) from None
     except InputError as exc:
+        if exc.field.startswith("joint_speed"):
+            raise _where(scenario, f"constraints.{exc.field}", exc) from None
         key = "solver.law" if exc.field == "constraints" else f"solver.{exc.field}"
         raise _where(scenario, key, exc) from None
     try:  # a run too long, or a record too large for memory: said before any output
@@ -169,6 +177,22 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
     except InputError as exc:
         raise _where(scenario, f"solver.{exc.field}", exc) from None
     return Run(scenario, robot, task, trajectory, tracker, q0, _speed_limits(scenario, robot))
+
+
+def _joint_speed(scenario: Scenario) -> JointSpeed | None:
+    """The scenario's ``[constraints.joint_speed]`` (None when ``enabled = false``)."""
+    spec = scenario.joint_speed
+    if not spec.get("enabled", True):
+        return None
+    keys = ("scale", "velocity", "default_velocity", "acceleration")
+    return JointSpeed(**{k: spec[k] for k in keys if k in spec})
+
+
+def _joint_speed_key(scenario: Scenario, joint: str) -> str:
+    """The ``[constraints.joint_speed]`` key that names an unknown joint."""
+    spec = scenario.joint_speed
+    key = "velocity" if joint in (spec.get("velocity") or {}) else "acceleration"
+    return f"constraints.joint_speed.{key}"
 
 
 def _speed_limits(scenario: Scenario, robot: Robot) -> SpeedLimits | None:

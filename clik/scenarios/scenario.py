@@ -39,6 +39,8 @@ from clik.engine import ENGINES
 from clik.errors import ScenarioError
 from clik.model.joints import JointValues
 from clik.model.xacro_expand import is_xacro
+from clik.scenarios.speed_tables import joint_speed_table, velocity_limits_table
+from clik.scenarios.tolerance import read_tolerance
 from clik.schema import (
     MAX_ANGLE,
     MAX_GAIN_DT,
@@ -49,7 +51,6 @@ from clik.schema import (
     MIN_SAMPLES,
     Table,
 )
-from clik.speed.speed_limits import MAX_PASSES, MAX_SCALE
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -95,6 +96,10 @@ class Scenario:
     velocity_limits: dict[str, Any] = field(default_factory=dict)
     """The ``[constraints.velocity_limits]`` table (:func:`_velocity_limits`), kept apart from
     ``constraints`` because it adds no constraint row: it re-times the reference."""
+    joint_speed: dict[str, Any] = field(default_factory=lambda: {"enabled": True})
+    """The ``[constraints.joint_speed]`` table
+    (:func:`~clik.scenarios.speed_tables.joint_speed_table`): the joint speed limits the
+    law keeps (on by default)."""
     raw: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
@@ -173,10 +178,11 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
         raise ScenarioError(file, "obstacles", f"expected distinct obstacle names, got {names}")
     constraints = _constraints(top.table("constraints"), solver["dt"])
     velocity_limits = constraints.pop("velocity_limits")
+    joint_speed = constraints.pop("joint_speed")
     top.done()
     return Scenario(
         file, name, robot, initial_q, task, trajectory, solver, obstacles, constraints,
-        velocity_limits=velocity_limits, raw=data,
+        velocity_limits=velocity_limits, joint_speed=joint_speed, raw=data,
     )  # fmt: skip
 
 
@@ -214,6 +220,7 @@ def _solver(slv: Table, duration: float | None) -> dict[str, Any]:
         "record_every": slv.number("record_every", 1, minimum=1, integer=True),
         "settle": slv.number("settle", 0.0, minimum=0.0, unit="[s]"),
         "engine": slv.string("engine", "compiled", ENGINES),
+        **read_tolerance(slv),
     }
     if duration is not None:
         steps = (duration + solver["settle"]) / dt + 1
@@ -415,7 +422,8 @@ def _constraints(ct: Table, dt: float) -> dict[str, Any]:
         for kind in TABLE_KINDS
         if kind.table is not None
     }
-    out["velocity_limits"] = _velocity_limits(ct.table("velocity_limits"))
+    out["velocity_limits"] = velocity_limits_table(ct.table("velocity_limits"))
+    out["joint_speed"] = joint_speed_table(ct.table("joint_speed"))
     out["release"] = ct.string("release", "projection", ("projection", "sign"))
     out["hysteresis"] = ct.number("hysteresis", 0.0, minimum=0.0, bound=MAX_LENGTH)
     out["max_active"] = ct.number("max_active", None, minimum=1, integer=True)
@@ -449,43 +457,4 @@ def _dexterity(dx: Table, dt: float) -> dict[str, Any]:
         "gain": _scalar_gain(dx, dt),
     }
     dx.done()
-    return out
-
-
-def _velocity_limits(vl: Table) -> dict[str, Any]:
-    """``[constraints.velocity_limits]``: respect the URDF joint speed limits (time scaling).
-
-    Keys: ``enabled`` (default false), ``scale`` (fraction of the URDF velocity limit,
-    ``0 < scale <= 10``, default 1), ``acceleration`` (one limit for every joint or a
-    table joint -> limit [rad/s^2 or m/s^2]; default none), ``margin`` (in [0, 1],
-    default 0.05), ``max_passes`` (1..20, default 6), ``window`` ([s], default 0.05).
-    Checked whether enabled or not.
-    """
-    accel_unit = "[rad/s^2 or m/s^2]"
-    scale = vl.number("scale", 1.0, minimum=0.0, strict=True)
-    if scale > MAX_SCALE:
-        raise vl.error("scale", f"a number > 0 and <= {MAX_SCALE:g} (of the URDF limit)", scale)
-    acceleration = vl.raw("acceleration", None)
-    if isinstance(acceleration, dict):
-        acceleration = vl.mapping(
-            "acceleration",
-            lambda t, k: float(t.number(k, minimum=0.0, strict=True, unit=accel_unit)),
-        )
-    elif acceleration is not None:
-        acceleration = float(vl.number("acceleration", minimum=0.0, strict=True, unit=accel_unit))
-    margin = vl.number("margin", 0.05, minimum=0.0)
-    if margin > 1.0:
-        raise vl.error("margin", "a number in [0, 1]", margin)
-    passes = vl.number("max_passes", 6, minimum=1, integer=True)
-    if passes > MAX_PASSES:
-        raise vl.error("max_passes", f"an integer in 1..{MAX_PASSES}", passes)
-    out = {
-        "enabled": vl.boolean("enabled", False),
-        "scale": float(scale),
-        "acceleration": acceleration,
-        "margin": float(margin),
-        "max_passes": int(passes),
-        "window": float(vl.number("window", 0.05, minimum=0.0, strict=True, unit="[s]")),
-    }
-    vl.done()
     return out

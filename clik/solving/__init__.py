@@ -5,6 +5,6 @@
 specification the compiled engine follows), ``compiled_solve`` the same solve in
 the compiled engine (its solvers kept per task), ``solve_result`` what it
 returns, ``constrained_solve`` the constrained law used when the unconstrained
-pose breaks a constraint, ``pose_check`` whether a configuration is clear of its
-constraints.
+pose breaks a constraint (checked by :mod:`clik.constraints.pose_check`: whether a
+configuration is clear of its constraints).
 """

@@ -6,7 +6,7 @@ docs/method.md, "Solve mode with constraints". :func:`clik.solve` with
 1. The unconstrained solve (:mod:`clik.solving.solve_mode`, compiled or Python, with its
    seeded restarts). When it fails, the target is out of reach whatever the
    constraints: that failure is returned (``blocked_by`` None).
-2. Its pose is checked directly (:class:`~clik.solving.pose_check.PoseCheck`: coal distances
+2. Its pose is checked directly (:class:`~clik.constraints.pose_check.PoseCheck`: coal distances
    ``d >= d_o`` (13), joints at least ``d_q`` inside their limits (17)). A pose that
    satisfies every constraint is returned: the fast path.
 3. Otherwise law (10) with the constraint rows, the extended task (23)-(25) with the
@@ -46,9 +46,9 @@ import numpy as np
 
 from clik.constraints import ConstraintSet
 from clik.constraints.kind import Violation
+from clik.constraints.pose_check import PoseCheck, constraint_label
 from clik.errors import InputError
 from clik.loop.tracker import Tracker
-from clik.solving.pose_check import PoseCheck, constraint_label
 from clik.solving.solve_result import SolveResult
 from clik.tasks.task import Task
 from clik.trajectory import Hold

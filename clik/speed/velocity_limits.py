@@ -11,6 +11,11 @@ than :data:`PROGRESS` (one that raises it is undone and made again with a
 smoother slowdown). The run kept is the one with the lowest ratio among those
 that reached the end of their trajectory.
 
+The passes run the law without the tracker's own joint speed limits
+(:mod:`clik.loop.speed_step`: their ratios say how fast the law wants to go; with
+the limits in the law they would stop at 1); when the tracker has them, the kept
+reference is run once more with them, and that run is the result.
+
 A run whose ratio stays above 1 (the law's own correction ``K e``, e.g. a start far
 from the reference, is not slowed by time scaling) does not claim it respected
 the limits: ``completed`` becomes ``velocity_limit``, with the joint, the ratio
@@ -28,8 +33,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clik.errors import InputError
-from clik.loop.tracker import ReachWarning, StabilityWarning, Tracker
+from clik.loop.joint_speed import JointSpeed
+from clik.loop.tracker import JOINT_SPEED, ReachWarning, StabilityWarning, Tracker
 from clik.loop.tracking import ProgressCallback
+from clik.loop.tracking_status import RAN_TO_END  # a run that reached its end: re-timed
 from clik.speed.speed_limits import SpeedBounds, SpeedLimits
 from clik.speed.time_scaling import retime, slowdown
 
@@ -43,9 +50,6 @@ if TYPE_CHECKING:
 
 PROGRESS = 0.01
 """A pass must lower the largest ratio by this fraction of it, or re-timing stops."""
-
-RAN_TO_END = ("completed", "violated")
-"""Statuses of a run that reached the end of its trajectory (its record can be re-timed)."""
 
 
 @dataclass
@@ -83,6 +87,7 @@ def run_within_limits(
     record_every: int = 1,
     settle: float = 0.0,
     progress: ProgressCallback | None = None,
+    **run_settings: Any,
 ) -> TrackingResult:
     """Run ``tracker`` along ``trajectory``, re-timed until the joint speeds are within limits.
 
@@ -99,6 +104,8 @@ def run_within_limits(
         record_every: As :meth:`Tracker.run`; only recorded samples are compared.
         settle: As :meth:`Tracker.run` [s], after the stretched duration.
         progress: Called during the first run only.
+        **run_settings: Further :meth:`Tracker.run` arguments (``tolerance``,
+            ``settling_time``, ...), passed to every run.
 
     Returns:
         The run kept, its status ``velocity_limit`` when it ran to its end with its
@@ -109,7 +116,8 @@ def run_within_limits(
         InputError: A robot with no velocity limit and no acceleration limit given.
     """
     bounds = limits.bounds(tracker.robot)
-    kwargs: dict[str, Any] = {"record_every": record_every, "settle": settle}
+    kwargs: dict[str, Any] = {"record_every": record_every, "settle": settle, **run_settings}
+    limited, tracker = tracker, tracker.without_speed_limits()  # passes: the law's own speeds
     result = tracker.run(trajectory, q0, progress=progress, **kwargs)
     ratio = peak_ratio(result, bounds)
     passes = _Passes(result, ratio, [ratio], limits.window, wall_time_s=result.wall_time_s)
@@ -118,12 +126,8 @@ def run_within_limits(
         passes.stop = _cannot_retime(result, trajectory, passes, limits)
         if passes.stop:
             break
-        factor = slowdown(
-            bounds.ratio(result.qdot, result.qddot),
-            tracker.dt * record_every,
-            passes.window,
-            limits.margin,
-        )
+        r_k = bounds.ratio(result.qdot, result.qddot)
+        factor = slowdown(r_k, tracker.dt * record_every, passes.window, limits.margin)
         retimed = retime(trajectory, retimed, result.t, factor, tracker.dt)
         try:  # the stretched run within the step and record budgets
             tracker.check_size(retimed.duration + settle, record_every)
@@ -148,9 +152,28 @@ def run_within_limits(
                 "correction K e of a start far from the reference), which time scaling "
                 "cannot slow"
             )
-        else:
-            ratio = new
+        ratio = new if new <= ratio * (1.0 - PROGRESS) else ratio
+    if limited.speed is not None:
+        _run_kept_with_limits(limited, passes, trajectory, q0, kwargs, bounds)
     return _finish(passes, bounds, limits, trajectory)
+
+
+def _run_kept_with_limits(
+    tracker: Tracker,
+    passes: _Passes,
+    trajectory: Trajectory,
+    q0: np.ndarray | Sequence[float] | None,
+    kwargs: dict[str, Any],
+    bounds: SpeedBounds,
+) -> None:
+    """Run the kept reference once more, with the law's own speed limits: the result."""
+    with warnings.catch_warnings():  # said once, by the first run
+        warnings.simplefilter("ignore", ReachWarning)
+        warnings.simplefilter("ignore", StabilityWarning)
+        reference = trajectory if passes.kept_retimed is None else passes.kept_retimed
+        passes.kept = tracker.run(reference, q0, **kwargs)
+    passes.kept_ratio = peak_ratio(passes.kept, bounds)
+    passes.wall_time_s += passes.kept.wall_time_s
 
 
 def _cannot_retime(
@@ -253,6 +276,7 @@ def track_within_limits(
     record_every: int = 1,
     progress: ProgressCallback | None = None,
     engine: str = "compiled",
+    joint_speed: JointSpeed | None = JOINT_SPEED,
 ) -> TrackingResult:
     """:func:`clik.track` that respects the joint speed limits (the same arguments).
 
@@ -270,6 +294,7 @@ def track_within_limits(
         record_every: Keep every k-th sample; only recorded samples are compared.
         progress: Called during the first run.
         engine: ``"compiled"`` or ``"python"``.
+        joint_speed: The joint speed limits the law keeps (the kept run's; None: none).
 
     Example:
         >>> limits = SpeedLimits(scale=0.8, acceleration=20.0)
@@ -277,8 +302,9 @@ def track_within_limits(
         >>> result.summary()["velocity_limits"]["stretched_duration_s"]
     """
     tracker = Tracker(
-        task, law=law, gain=gain, dt=dt, damping=damping, constraints=constraints, engine=engine
-    )
+        task, law=law, gain=gain, dt=dt, damping=damping, constraints=constraints, engine=engine,
+        joint_speed=joint_speed,
+    )  # fmt: skip
     limits = SpeedLimits() if velocity_limits is None else velocity_limits
     return run_within_limits(
         tracker, trajectory, q0, limits, record_every=record_every, progress=progress

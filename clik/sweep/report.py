@@ -14,10 +14,10 @@ from pathlib import Path
 RAISED = "error"
 """The ``status`` of a run that raised (or whose task failed, e.g. ``KilledWorker``)."""
 
-FAILED_STATUSES = frozenset({"violated", "velocity_limit", "diverged"})
+FAILED_STATUSES = frozenset({"violated", "velocity_limit", "off_track", "diverged"})
 """Run statuses that fail a sweep, as do runs that raised (:data:`RAISED`)."""
 
-STATUS_ORDER = ("completed", "deadlock", "diverged", "violated", "velocity_limit")
+STATUS_ORDER = ("completed", "deadlock", "diverged", "violated", "velocity_limit", "off_track")
 """The order of the statuses in :func:`status_line` (others follow, sorted)."""
 
 

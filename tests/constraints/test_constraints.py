@@ -15,7 +15,7 @@ from clik.constraints.obstacle_rows import point_jacobian
 from clik.scenarios import scenario_path
 from clik.scenarios.runner import build
 from clik.trajectory import Line
-from tests.limits_check import assert_within_limits
+from tests.limits_check import assert_completed, assert_within_limits
 
 FD = 1e-6
 PANDA_FINGER_STL = str(
@@ -179,8 +179,7 @@ def test_case_study_claims(runs):
     q3max = {n: math.degrees(res.joint_max[2]) for n, res in r.items()}
     dist = {n: res.summary()["min_obstacle_distance"] for n, res in r.items()}
     for res in r.values():
-        assert res.status == "completed"
-        assert_within_limits(res, res.robot)  # the URDF's limits; the -80 deg one below
+        assert_completed(res)  # the URDF's limits; the -80 deg one below
     # 1: link 4 hits the obstacle, q3 passes -80 deg
     assert dist["unconstrained"] < 1e-4 and q3max["unconstrained"] > Q3_LIMIT
     # 2: no collision, q3 still passes -80 deg

@@ -171,7 +171,9 @@ def test_stretched_arm_keeps_its_dexterity_with_the_row(engine):
     run, w_min, (held, free) = scenario_pair(engine)
     w_held, w_free = manipulability_record(held), manipulability_record(free)
     assert w_held is not None and w_free is not None
-    assert held.status == "completed"
+    # the reference leaves what the row allows: 10 cm off it for 1.24 s, held by the row
+    assert held.status == "off_track"
+    assert "while constraint(s) dexterity held the arm off the reference" in held.reason
     assert_within_limits(held, run.robot)
     assert held.summary()["min_manipulability"] == pytest.approx(w_held.min(), rel=1e-12)
     assert w_held.min() >= (1.0 - LAW9_TOLERANCE) * w_min  # measured 0.0943, w_min 0.1
@@ -200,11 +202,15 @@ def test_pseudoinverse_law_holds_the_row(planar4r):
     cset = ConstraintSet(planar4r, dexterity=Dexterity(w_min))
     held = clik.track(task, trajectory, q0=CASE_Q0, law="pseudoinverse", constraints=cset)
     free = clik.track(task, trajectory, q0=CASE_Q0, law="pseudoinverse")
-    assert held.status == free.status == "completed"
+    # near the border of the reach joint 4 turns at 3.7x (held) and joint 3 at 2.0x (free)
+    # its 3 rad/s limit (measured) unless the law bounds the joint speeds (issue 23)
+    bounded = held.info.get("joint_speed") is not None
+    assert held.status == free.status == ("completed" if bounded else "velocity_limit")
     assert_within_limits(held, planar4r)
     assert held.summary()["min_manipulability"] >= (1.0 - LAW10_TOLERANCE) * w_min
     assert free.summary()["min_manipulability"] < 0.85 * w_min  # measured 0.066
-    assert held.max_task_error < 1e-3
+    # bounded: joint 4 held at its 3 rad/s limit near the border slows the tip (1.13 mm)
+    assert held.max_task_error < (2e-3 if bounded else 1e-3)
     assert [e["action"] for e in held.events] == ["activate", "release"]
 
 
@@ -245,9 +251,9 @@ def test_scenario_through_the_cli(tmp_path, planar4r):
         warnings.simplefilter("ignore", ReachWarning)
         path = scenario_path("case_study_dexterity")
         code = main(["solve", str(path), "--out", str(out), "--quiet"])
-    assert code == 0
+    assert code == 3  # the reference leaves the reach, and what the row allows: off track
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["status"] == "completed"
+    assert summary["status"] == "off_track"
     assert_summary_within_limits(summary, planar4r)
     assert summary["min_manipulability"] >= (1.0 - LAW9_TOLERANCE) * 0.1
     assert summary["dexterity_used"] == {"threshold": 0.1, "gain": 1000.0}

@@ -259,7 +259,9 @@ def test_obstacle_inside_a_link(form, velocity):
     centre = 0.5 * (robot.data.oMi[3].translation + robot.data.oMi[4].translation)
     cset = run.tracker.constraints
     cset.set_obstacles([Obstacle("blob", "sphere", centre, velocity=velocity, radius=0.01)])
-    result = check(run.tracker, run.trajectory, run.q0, record_every=2)
+    # From 2.01 s links 2 and 3 are equally near the blob (within 1e-15 m) while the row
+    # passes from one to the other: which is "nearest" there is the engines' rounding.
+    result = check(run.tracker, run.trajectory, run.q0, record_every=2, until=2.0)
     assert result.summary()["min_obstacle_distance"] < 0.0
     assert any(v["constraint"].startswith("obstacle:blob:") for v in result.violations)
 

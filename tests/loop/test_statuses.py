@@ -21,7 +21,7 @@ from clik.constraints import ConstraintSet, JointLimits, Obstacle
 from clik.scenarios import scenario_path
 from clik.scenarios.runner import build
 from clik.trajectory import Hold, Line
-from tests.limits_check import assert_within_limits
+from tests.limits_check import assert_completed, assert_within_limits
 
 Q0 = np.radians([180.0, -30.0, -90.0, -30.0])
 
@@ -127,8 +127,7 @@ def test_masked_task_error_counts_only_its_own_rows(planar4r):
     assert y_error > 0.01  # y is free: far from the line's y
     assert result.max_task_error == pytest.approx(x_error, abs=1e-12)
     assert result.max_task_error < 1e-6
-    assert result.status == "completed", result.reason  # no deadlock on a false error
-    assert_within_limits(result, planar4r)
+    assert_completed(result, planar4r)  # no deadlock on a false error
 
 
 def test_a_constraint_set_shared_by_two_trackers_constrains_both(planar4r):
@@ -143,7 +142,7 @@ def test_a_constraint_set_shared_by_two_trackers_constrains_both(planar4r):
     second.run(line, Q0)
     a2 = first.run(line, Q0)  # after the second tracker used the set
     for result in (a1, a2):
-        assert result.status == "completed", result.reason
+        assert_completed(result, planar4r)
         assert_within_limits(result, planar4r, obstacle_floor=0.03 - 1e-4)
     assert a2.events == a1.events
     np.testing.assert_allclose(a2.q, a1.q, atol=1e-12)
@@ -199,7 +198,16 @@ def test_start_inside_a_threshold_is_recovered_without_a_jump(planar4r):
     cset = ConstraintSet(planar4r, obstacles=[ball], obstacle_threshold=0.06)
     hold = Hold(position=task.placement(Q0).translation, duration=0.5)
     result = clik.track(task, hold, q0=Q0, law="pseudoinverse", constraints=cset)
-    assert result.status == "completed", result.reason
+    # the push out turns joint 2 at 7.6x its 3 rad/s limit (measured) unless the law
+    # bounds the joint speeds (info["joint_speed"], issue 23): not ``completed`` then
+    speed_bound = result.info.get("joint_speed") is not None
+    assert result.status == ("completed" if speed_bound else "velocity_limit"), result.reason
+    recovery = result.summary()["recovery"]
+    assert [r["constraint"] for r in recovery] == ["obstacle:ball:link2", "obstacle:ball:link3"]
+    for record in recovery:  # both links meet at the elbow, 4 cm from the ball
+        assert record["depth"] == pytest.approx(0.02, abs=1e-4)
+        assert record["recovered"] and 0.0 < record["duration"] < 0.5
+    assert "started inside the threshold of obstacle:ball:link2 (depth 20 mm)" in result.reason
     assert result.min_obstacle_distance[0] < 0.06 - 0.01
     assert result.min_obstacle_distance[-1] >= 0.06 - 1e-4
     assert np.abs(np.diff(result.q, axis=0)).max() <= 0.05

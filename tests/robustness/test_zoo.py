@@ -1,5 +1,8 @@
 """Every robot of the zoo, pushed into a sphere by its task: completed clean, or deadlock.
 
+(Or ``off_track``, when the run reaches its end with the obstacle's row holding the arm
+off the reference before the deadlock window is full: the reason names the row.)
+
 The run of :mod:`zoo_runs` makes the task and the obstacle constraint conflict. Law (10)
 with constraints first must keep every constraint and stop with ``deadlock`` (or track to
 the end without touching anything); it must never swing the arm (a joint step above
@@ -38,9 +41,15 @@ def test_zoo_obstacle_run(name: str) -> None:
             # the overlap is on the fixed base, which no motion clears (and the reason says so)
             assert {v["constraint"] for v in result.violations} <= stuck, result.violations
             assert "on a link no joint moves" in result.reason, result.reason
+    elif result.status == "off_track":  # the conflict held the arm off, not yet stopped
+        assert "held the arm off the reference" in result.reason, result.reason
     else:
         assert result.status in ("completed", "deadlock"), result.reason
     assert run.max_joint_step <= MAX_STEP, f"joint step {run.max_joint_step:.3g}"
+    ratio = result.summary()["max_velocity_ratio"]  # the law keeps every joint in its limit
+    assert ratio is None or ratio <= 1.0 + 1e-9, f"a joint at {ratio:.4g} x its speed limit"
+    bounds = np.array(result.info["joint_speed"]["velocity"])
+    assert np.all(np.abs(result.qdot) <= bounds * (1.0 + 1e-9))
     assert np.all(np.isfinite(result.q))
     if result.status == "completed":
         assert run.min_distance >= 0.0
@@ -53,4 +62,4 @@ def test_zoo_mostly_runs() -> None:
     """The refusals above are the exception: the zoo's arms all run."""
     names = ["ur5", "panda", "xarm7", "z1", "talos", "tiago", "solo12", "bolt"]
     statuses = {n: zoo_run(n).status for n in names}
-    assert set(statuses.values()) <= {"completed", "deadlock"}, statuses
+    assert set(statuses.values()) <= {"completed", "deadlock", "off_track"}, statuses

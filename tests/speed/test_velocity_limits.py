@@ -116,10 +116,14 @@ def assert_on_the_path(result: TrackingResult, line: Line) -> None:
     assert np.linalg.norm(result.position - ref, axis=1).max() <= TRACKING_TOLERANCE
 
 
+FREE = "[constraints.joint_speed]\nenabled = false\n"
+"""No speed limit in the law either: the law's own joint speeds."""
+
+
 @pytest.fixture(scope="module")
 def unconstrained(panda, tmp_path_factory) -> tuple[int, dict, TrackingResult]:
     folder = tmp_path_factory.mktemp("free")
-    return solve(scenario(folder, panda), folder / "out")
+    return solve(scenario(folder, panda, FREE), folder / "out")
 
 
 @pytest.fixture(scope="module")
@@ -131,8 +135,10 @@ def constrained(panda, tmp_path_factory) -> tuple[int, dict, TrackingResult]:
 
 def test_the_fast_line_breaks_its_limits_unconstrained(unconstrained, panda):
     code, summary, result = unconstrained
-    assert code == 0 and summary["status"] == "completed"
+    # no limit in the law and no re-timing: a joint above its limit is not `completed`
+    assert code == 3 and summary["status"] == "velocity_limit", summary["reason"]
     assert velocity_ratio(result.qdot, panda) > 1.5
+    assert "above its speed limit" in summary["reason"]
     assert "velocity_limits" not in summary
 
 
@@ -223,7 +229,8 @@ def test_the_scenario_takes_an_acceleration_table(panda, tmp_path):
 
 def test_error_correction_alone_ends_velocity_limit(panda):
     """A start 0.1 m from the reference with K = 500: K e is 50 m/s, re-timing cannot help."""
-    result = hand_run(panda, hand_line(panda, offset=(0.1, 0.0, 0.0)), gain=500.0)
+    line = hand_line(panda, offset=(0.1, 0.0, 0.0))
+    result = hand_run(panda, line, gain=500.0, joint_speed=None)
     ratio = velocity_ratio(result.qdot, panda)
     assert ratio > 1.5
     assert result.status == "velocity_limit"
@@ -239,7 +246,7 @@ def test_error_correction_alone_ends_velocity_limit(panda):
 
 
 def test_error_correction_alone_exits_3_from_the_command_line(panda, tmp_path):
-    section = "[constraints.velocity_limits]\nenabled = true\n"
+    section = FREE + "[constraints.velocity_limits]\nenabled = true\n"
     path = scenario(tmp_path, panda, section, gain=500.0, offset=(0.1, 0.0, 0.0))
     code, summary, result = solve(path, tmp_path / "out")
     assert code == 3
@@ -259,9 +266,10 @@ def test_with_a_constraint_set(panda):
 
 
 def test_a_disabled_section_changes_nothing(panda, tmp_path, unconstrained):
-    section = "[constraints.velocity_limits]\nenabled = false\nscale = 0.5\n"
+    section = FREE + "[constraints.velocity_limits]\nenabled = false\nscale = 0.5\n"
     code, summary, result = solve(scenario(tmp_path, panda, section), tmp_path / "out")
-    assert code == 0 and "velocity_limits" not in summary
+    assert code == 3 and "velocity_limits" not in summary
+    assert summary["status"] == unconstrained[1]["status"] == "velocity_limit"
     np.testing.assert_array_equal(result.qdot, unconstrained[2].qdot)
 
 

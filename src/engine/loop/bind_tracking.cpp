@@ -215,22 +215,29 @@ void bind_configs(nb::module_& m) {
       .def(
           "__init__",
           [](LawConfig* self, const std::string& law, double damping, double dt, double beta_max,
-             const Vec& K_task, int rows, double alpha) {
+             const Vec& K_task, int rows, double alpha, const std::optional<Vec>& vmax,
+             const std::optional<Vec>& amax) {
             require(finite_positive(dt), "LawConfig: dt a finite time > 0 [s]");
             require(finite_nonnegative(damping), "LawConfig: damping finite >= 0");
             require(finite_positive(beta_max), "LawConfig: beta_max finite > 0 [1/s]");
             require(finite_positive(alpha), "LawConfig: alpha finite > 0 [1/s]");
             require(rows >= 1 && K_task.size() >= 1 && K_task.size() <= MAX_TASK_ROWS,
                     "LawConfig: rows >= 1 and K_task, 1 to 6 task gains");
-            new (self) LawConfig{LawSettings{law_kind(law), damping, dt, beta_max}, K_task, rows,
-                                 alpha};
+            // vmax and amax are checked against the model where the run is built.
+            SpeedBounds speed{vmax.value_or(Vec()), amax.value_or(Vec())};
+            const bool budget_blocks = speed.velocity.size() == 0;
+            new (self) LawConfig{LawSettings{law_kind(law), damping, dt, beta_max, budget_blocks},
+                                 K_task, rows, alpha, std::move(speed)};
           },
           nb::kw_only(), nb::arg("law"), nb::arg("damping"), nb::arg("dt"), nb::arg("beta_max"),
-          nb::arg("K_task"), nb::arg("rows"), nb::arg("alpha"))
+          nb::arg("K_task"), nb::arg("rows"), nb::arg("alpha"), nb::arg("vmax") = nb::none(),
+          nb::arg("amax") = nb::none())
       .def_prop_ro("dt", [](const LawConfig& c) { return c.settings.dt; })
       .def_ro("K_task", &LawConfig::K_task)
       .def_ro("rows", &LawConfig::rows)
-      .def_ro("alpha", &LawConfig::alpha);
+      .def_ro("alpha", &LawConfig::alpha)
+      .def_prop_ro("vmax", [](const LawConfig& c) { return c.speed.velocity; })
+      .def_prop_ro("amax", [](const LawConfig& c) { return c.speed.acceleration; });
   nb::class_<StopConfig>(m, "StopConfig", "The stop checks' settings (clik.loop.stop_checks).")
       .def(
           "__init__",

@@ -197,20 +197,33 @@ double Law::prioritized(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot) {
     gram(JN_, A_);
     damped_solve(A_, rest_, epsilon, y_);
     qdot_t_.noalias() = JN_.transpose() * y_.head(m);
-    within_budget(qdot_t_);
-    qdot = qdot_c_ + qdot_t_;
   } else {
+    qdot_c_.setZero();
     gram(J, A_);
     rest_.head(m) = b_task;
     damped_solve(A_, rest_, epsilon, y_);
     qdot_t_.noalias() = J.transpose() * y_.head(m);
-    within_budget(qdot_t_);
-    qdot = qdot_t_;
   }
+  if (s_.budget_blocks) {
+    within_budget(qdot_t_);
+    qdot = qdot_c_ + qdot_t_;
+    return unrealised(ext, qdot);
+  }
+  qdot = qdot_c_ + qdot_t_;
+  const double blocked = unrealised(ext, qdot);
+  within_budget(qdot_t_);
+  qdot = qdot_c_ + qdot_t_;
+  return blocked;
+}
+
+// |b - J qdot| / |b| on the task rows (b_ holds the demand): 0 when realised exactly.
+double Law::unrealised(const ExtendedTask& ext, const Eigen::Ref<const Vec>& qdot) {
+  const int m = ext.m;
+  const auto b_task = b_.head(m);
   const double demand = b_task.norm();
   if (demand == 0.0) return 0.0;
   rest_.head(m) = b_task;
-  rest_.head(m).noalias() -= J * qdot;
+  rest_.head(m).noalias() -= ext.J.topRows(m) * qdot;
   return rest_.head(m).norm() / demand;
 }
 

@@ -24,6 +24,9 @@ struct LawSettings {
   double damping = 0.0;   // lambda_0 of law (10)
   double dt = 1e-3;       // [s]
   double beta_max = 0.0;  // bound on the nonlinear law's extra gain [1/s]
+  // Whether law (10)'s task-level step budget counts in its unrealised fraction (the
+  // paper's law); false with the joint speed limits: measured before it.
+  bool budget_blocks = true;
 };
 
 class Law {
@@ -41,12 +44,17 @@ class Law {
 
   const LawSettings& settings() const { return s_; }
 
+  // Law (10)'s constraint level qdot_c of the last velocity() (0 without constraint
+  // rows): the speed step's part to keep first.
+  const Vec& constraint_part() const { return qdot_c_; }
+
  private:
   double prioritized(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot);
   void constraint_level(const ExtendedTask& ext, int v, double epsilon);
   void one_constraint_level(const ExtendedTask& ext, double epsilon);
   void damped_solve(const TaskMat& A, const Vec& b, double epsilon, Vec& y);
   void within_budget(Vec& qdot) const;
+  double unrealised(const ExtendedTask& ext, const Eigen::Ref<const Vec>& qdot);
 
   LawSettings s_;
   double scale_ = 0.0;  // sqrt of the largest squared row norm of the task's J

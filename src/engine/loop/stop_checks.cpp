@@ -30,6 +30,9 @@ double StopChecks::stability_margin(const ExtendedTask& ext, int r) {
   for (int i = 0; i < r; ++i) S_.row(i) = std::sqrt(ext.K[i]) * ext.J.row(i);
   A_.resize(r, r);
   A_.noalias() = S_ * S_.transpose();
+  // Not finite (J J^T overflows): no bound holds, as clik/loop/gains.py says (no eigensolver
+  // call on inf, and the same number in both engines).
+  if (!A_.allFinite()) return INF;
   eig_.compute(A_, Eigen::EigenvaluesOnly);
   return dt_ * eig_.eigenvalues()[r - 1];
 }

@@ -29,6 +29,20 @@ const TaskConfig& TrackingRun::checked(const pinocchio::Model& model, const Task
         "TrackingRun: the task's frame in the model, 1 to 6 rows among 0..5, one gain per row "
         "and room for them (LawConfig.rows >= m)");
   }
+  const auto nv = static_cast<Eigen::Index>(model.nv);
+  const Vec& v = law.speed.velocity;
+  const Vec& a = law.speed.acceleration;
+  bool speed_ok = (v.size() == 0 || v.size() == nv) && (a.size() == 0 || a.size() == nv) &&
+                  (a.size() == 0 || v.size() == nv);
+  for (Eigen::Index i = 0; speed_ok && i < v.size(); ++i) {
+    speed_ok = std::isfinite(v[i]) && v[i] > 0.0;
+  }
+  for (Eigen::Index i = 0; speed_ok && i < a.size(); ++i) speed_ok = a[i] > 0.0;  // inf: none
+  if (!speed_ok) {
+    throw std::invalid_argument(
+        "LawConfig: vmax, nv finite speeds > 0 [rad/s or m/s] or none; amax, nv accelerations "
+        "> 0 [rad/s^2 or m/s^2] (inf: none) or none, and only with vmax");
+  }
   for (int i : joints.index) {
     if (i < 0 || i >= model.nq) {
       throw std::invalid_argument("JointMonitorConfig: an index outside the robot's model");
@@ -44,7 +58,7 @@ TrackingRun::TrackingRun(const pinocchio::Model& model, const TaskConfig& task,
     : model_(model), data_(model), task_(checked(model, task, law, joints)),
       m_(static_cast<int>(task.rows.size())), dt_(law.settings.dt), t_(t),
       ext_(m_, law.rows, model.nv, law.K_task), law_(law.settings, law.rows, model.nv),
-      checks_(stop, law.settings.kind, law.settings.dt, law.rows), rec_(record),
+      speed_(law.speed, law.settings.dt, model.nv), checks_(stop, law.settings.kind, law.settings.dt, law.rows), rec_(record),
       monitor_(std::move(joints)),
       crun_(constraints), J6_(6, model.nv), e6_(Eigen::Matrix<double, 6, 1>::Zero()),
       qdot_(Vec::Zero(model.nv)), dq_(Vec::Zero(model.nv)), qnext_(Vec::Zero(model.nq)) {
@@ -134,6 +148,10 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
                       ? m_
                       : m_ + update_constraints(*crun_, k, qv, model_, data_, ext_, law_, exact);
     const double blocked = law_.velocity(ext_, r, qdot_);
+    if (speed_.enabled()) {
+      const bool level = law_.settings().kind == LawKind::pseudoinverse;
+      speed_.apply(ext_, r, level ? &law_.constraint_part() : nullptr, qdot_);
+    }
     double err = 0.0, err_rot = 0.0;
     error_norms(err, err_rot);
     err_ = err;

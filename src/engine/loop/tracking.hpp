@@ -3,7 +3,7 @@
 //   1. kinematics: the frame's placement and Jacobian at q_k, eq. (3);
 //   2. task error e = x_d - x, eq. (6), on the task's rows;
 //   3. constraint rows (13)-(19) into the extended task (24)-(25);
-//   4. the law, (9), (8) or (10);
+//   4. the law, (9), (8) or (10), within the joint speed limits (S1)-(S3);
 //   5. stop checks and limits crossed;
 //   6. recording, then q_{k+1} = q_k (+) qdot_k dt.
 // Python samples the reference in chunks and calls advance() per chunk;
@@ -18,6 +18,7 @@
 
 #include "loop/laws.hpp"
 #include "loop/recording.hpp"
+#include "loop/speed_step.hpp"
 #include "loop/stop_checks.hpp"
 #include "constraints/violations.hpp"
 #include "tasks/extended_task.hpp"
@@ -42,6 +43,7 @@ struct LawConfig {
   Vec K_task;       // the task rows' gains [1/s] (m)
   int rows = 0;     // room of the extended task: the task's rows and the most constraint rows
   double alpha = 0; // the task's largest gain [1/s] (the constraint rows' default gains)
+  SpeedBounds speed; // the joint speed limits the law keeps (empty: none)
 };
 
 using StopConfig = StopSettings;  // `_engine.StopConfig`
@@ -95,6 +97,7 @@ class TrackingRun {
   TimesView t_;
   ExtendedTask ext_;
   Law law_;
+  SpeedStep speed_;
   StopChecks checks_;
   Recorder rec_;
   ViolationMonitor monitor_;
