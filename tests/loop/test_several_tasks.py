@@ -241,27 +241,27 @@ def test_bad_stacks_are_refused(arm: clik.Robot) -> None:
     line = pose_line(hand, ARM_Q0, np.array([0.1, 0.0, 0.0]), 1.0)
     posture = clik.PostureTask(arm)
     two = [clik.Goal(hand, line), clik.Goal(posture, JointPath(ARM_Q0), priority=2)]
-    with pytest.raises(clik.InputError, match="tasks.priority.*pseudoinverse"):
+    with pytest.raises(clik.InputError, match=r"tasks.priority.*pseudoinverse"):
         clik.Tracker(tasks=two, law="transpose")
-    with pytest.raises(clik.InputError, match="objectives.*pseudoinverse"):
+    with pytest.raises(clik.InputError, match=r"objectives.*pseudoinverse"):
         clik.Tracker(hand, law="transpose", objectives=[clik.Objective("joint_centering")])
-    with pytest.raises(clik.InputError, match="tasks.*frame task"):
+    with pytest.raises(clik.InputError, match=r"tasks.*frame task"):
         clik.Tracker(tasks=[clik.Goal(posture, JointPath(ARM_Q0))], law="pseudoinverse")
-    with pytest.raises(clik.InputError, match="tasks.name"):
+    with pytest.raises(clik.InputError, match=r"tasks.name"):
         clik.Tracker(tasks=[clik.Goal(hand, line, name="a"), clik.Goal(posture, line, name="a")])
     with pytest.raises(clik.InputError, match="either task"):
         clik.Tracker(hand, tasks=two)
-    with pytest.raises(clik.InputError, match="tasks.priority"):
+    with pytest.raises(clik.InputError, match=r"tasks.priority"):
         clik.Goal(hand, line, priority=0)
-    with pytest.raises(clik.InputError, match="task.relative_to"):
+    with pytest.raises(clik.InputError, match=r"task.relative_to"):
         clik.RelativeTask(arm, "panda_hand", "panda_hand")
-    with pytest.raises(clik.InputError, match="task.axes"):
+    with pytest.raises(clik.InputError, match=r"task.axes"):
         clik.ComTask(arm, ["x", "w"])
     with pytest.raises(clik.JointNotFound):
         clik.PostureTask(arm, ["elbow"])
-    with pytest.raises(clik.InputError, match="objectives.gain"):
+    with pytest.raises(clik.InputError, match=r"objectives.gain"):
         clik.Objective("posture", gain=-1.0)
-    with pytest.raises(clik.InputError, match="objectives.kind"):
+    with pytest.raises(clik.InputError, match=r"objectives.kind"):
         clik.Objective("dexterity")  # type: ignore[arg-type]
     wrong = [clik.Goal(hand, line), clik.Goal(posture, JointPath(np.zeros(3)), priority=2)]
     tracker = clik.Tracker(tasks=wrong, law="pseudoinverse", engine="python")
