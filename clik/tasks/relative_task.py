@@ -28,9 +28,9 @@ from clik.errors import InputError
 from clik.tasks.kind import BaseTask
 from clik.tasks.task import (
     AXES,
+    Task,
     TaskKind,
     frame_error,
-    frame_rows,
     pose_reference_arrays,
     split_norms,
 )
@@ -68,19 +68,15 @@ class RelativeTask(BaseTask):
         kind: TaskKind = "pose",
         axes: Sequence[str] | None = None,
     ) -> None:
-        rows = frame_rows(kind, axes)
-        robot.check_model()
-        self.robot = robot
-        self.frame, self.frame_id = frame, robot.frame_id(frame)
+        world = Task(robot, frame, kind, axes)  # the same frame in the world: checks all
+        self.robot, self.frame, self.frame_id = robot, frame, world.frame_id
         self.relative_id = robot.frame_id(relative_to)
         if self.relative_id == self.frame_id:
             raise InputError("task.relative_to", f"a frame other than {frame!r}", relative_to)
         self.relative_to = relative_to
-        self.kind: TaskKind = kind
-        self.rows = np.asarray(rows, dtype=np.intp)
-        self.m = len(rows)
-        self.has_position = bool(np.any(self.rows < 3))
-        self.has_orientation = bool(np.any(self.rows >= 3))
+        self.kind: TaskKind = world.kind
+        self.rows, self.m = world.rows, world.m
+        self.has_position, self.has_orientation = world.has_position, world.has_orientation
 
     reference_size = 12
     """A pose of A in B per sample: the position (3) [m], then the rotation, row-major (9)."""
