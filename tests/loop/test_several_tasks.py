@@ -273,3 +273,24 @@ def test_bad_stacks_are_refused(arm: clik.Robot) -> None:
         tracker.run(q0=ARM_Q0)
     with pytest.raises(clik.InputError, match="trajectory"):
         clik.Tracker(tasks=two, law="pseudoinverse", engine="python").run(line, q0=ARM_Q0)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_deadlock_names_the_tasks(baxter: clik.Robot, engine: str) -> None:
+    """Hands pulled apart past their reach: a deadlock naming each task's rows."""
+    q0 = bent(baxter)
+    left = clik.Task(baxter, "left_hand_link", "position")
+    right = clik.Task(baxter, "right_hand_link", "position")
+    pl, pr = left.placement(q0).translation, right.placement(q0).translation
+    apart = np.array([0.0, 1.5, 0.0])
+    goals = [
+        clik.Goal(left, Line(pl, pl + apart, 2.0), name="left"),
+        clik.Goal(right, Line(pr, pr - apart, 2.0), name="right"),
+    ]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", clik.ReachWarning)
+        result = clik.track(tasks=goals, q0=q0, law="pseudoinverse", gain=100, engine=engine)
+    assert result.status == "deadlock"
+    assert "task rows that cannot follow: left:y, right:y" in result.reason
+    assert result.task_errors["right"]["final"] > 0.3
+    assert result.task_errors["left"]["final"] > 0.3
