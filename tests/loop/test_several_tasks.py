@@ -294,3 +294,29 @@ def test_deadlock_names_the_tasks(baxter: clik.Robot, engine: str) -> None:
     assert "task rows that cannot follow: left:y, right:y" in result.reason
     assert result.task_errors["right"]["final"] > 0.3
     assert result.task_errors["left"]["final"] > 0.3
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_solve_reaches_both_hands_poses(baxter: clik.Robot, engine: str) -> None:
+    q0 = bent(baxter)
+    hands = [clik.Task(baxter, f"{side}_hand_link", "pose") for side in ("left", "right")]
+    targets = []
+    for hand, dy in zip(hands, (-0.05, 0.05), strict=True):
+        start = hand.placement(q0)
+        targets.append(pin.SE3(start.rotation, start.translation + np.array([0.1, dy, 0.15])))
+    goals = [
+        clik.Goal(h, PoseTrajectory(Hold(position=t.translation), Hold(rotation=t.rotation)))
+        for h, t in zip(hands, targets, strict=True)
+    ]
+    posture = clik.PostureTask(baxter)
+    goals.append(clik.Goal(posture, JointPath(posture.angles(q0)), priority=2))
+    result = clik.solve(tasks=goals, q0=q0, engine=engine, tolerance=1e-6,
+                        orientation_tolerance=1e-6, max_iterations=400)  # fmt: skip
+    assert result.success, result.reason
+    for hand, target in zip(hands, targets, strict=True):
+        reached = hand.placement(result.q)
+        assert np.linalg.norm(reached.translation - target.translation) <= 1e-6
+        assert np.linalg.norm(pin.log3(reached.rotation.T @ target.rotation)) <= 1e-6
+    assert np.all(result.q >= baxter.lower) and np.all(result.q <= baxter.upper)
+    with pytest.raises(clik.InputError, match="either task and target"):
+        clik.solve(hands[0], targets[0], tasks=goals)
