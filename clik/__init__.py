@@ -40,29 +40,39 @@ from clik.loop.tracker import ReachWarning, StabilityWarning, Tracker, track
 from clik.model.loading import ReferenceClippedWarning
 from clik.model.mimic import MimicJointWarning
 from clik.model.robot import Robot
+from clik.objectives.objective import Objective
 from clik.outputs.result import TrackingResult
 from clik.solving.solve_mode import solve
 from clik.solving.solve_result import SolveResult
 from clik.speed.speed_limits import SpeedLimits
 from clik.speed.velocity_limits import track_within_limits
+from clik.tasks.com_task import ComTask
+from clik.tasks.goal import Goal
+from clik.tasks.posture_task import PostureTask
+from clik.tasks.relative_task import RelativeTask
 from clik.tasks.task import Task
 
 __all__ = [
     "ClikError",
+    "ComTask",
     "EngineError",
     "ExportError",
     "FrameNotFound",
     "GeometryError",
+    "Goal",
     "InfeasibleError",
     "InputError",
     "JointNotFound",
     "JointSpeed",
     "MimicJointWarning",
+    "Objective",
     "OutputError",
     "OutputExistsError",
     "OutputLockedError",
+    "PostureTask",
     "ReachWarning",
     "ReferenceClippedWarning",
+    "RelativeTask",
     "Robot",
     "RobotLoadError",
     "ScenarioError",

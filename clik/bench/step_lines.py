@@ -13,6 +13,7 @@ import numpy as np
 import clik
 from clik.bench.config import DT, BenchConfig
 from clik.bench.pink_backend import Pink
+from clik.bench.step_dual_arm import dual_arm_variants
 from clik.bench.step_pink import pink_step_variant
 from clik.bench.step_variant import Variant, clik_variant
 from clik.constraints import ConstraintSet, JointLimits, Obstacle
@@ -276,4 +277,4 @@ def step_variants(config: BenchConfig, pink: Pink | None) -> list[Variant]:
         variants += planar_variants(planar, both, engine) + panda_variants(panda, engine)
     if pink is not None:
         variants += pink_variants(pink, panda)
-    return variants
+    return variants + dual_arm_variants(config, ENGINES, pink)

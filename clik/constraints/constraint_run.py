@@ -51,13 +51,14 @@ class ConstraintRun:
 
     Args:
         cset: The constraint set (its kinds, the collision scene).
-        m: Task rows.
+        m: Task rows (every task's: the constraint rows start there).
         law: Law name (sets the default gains and the bound on active rows).
         alpha: The task's largest gain [1/s].
         t: The run's time grid [s].
         n_rec: Number of recorded samples.
         frame_id: The task's frame (rows that need it: dexterity).
-        task_rows: The task's rows among ``(x, y, z, rx, ry, rz)`` (idem).
+        task_rows: The (primary) task's rows among ``(x, y, z, rx, ry, rz)`` (idem): the
+            extended task's first rows, which the kinds read as "the task".
         data: The run's Pinocchio data, where the loop computes the kinematics the rows
             read; None: a new one.
 
@@ -95,8 +96,9 @@ class ConstraintRun:
         self.alpha = alpha
         self.limit = cset.row_limit(m, law)
         self.t = t
+        self.task_m = task_m = len(self.task_rows)  # the primary task's rows (0 .. task_m)
         setup = RunSetup(
-            cset.robot, m, law, t, n_rec, frame_id, self.task_rows, cset.scene,
+            cset.robot, task_m, law, t, n_rec, frame_id, self.task_rows, cset.scene,
             cset.monitor_margin, self.scene,
         )  # fmt: skip
         self.runs: list[KindRun] = [kind.start(setup) for kind in cset.kinds]
@@ -138,7 +140,7 @@ class ConstraintRun:
             dq = pin.difference(self.robot.model, self._q_prev, q)
             dq_abs = np.abs(dq, out=dq)
         s = Sample(
-            tk, q, dq_abs, self.robot, ext.J[: self.m], exact, self.active, self.scene,
+            tk, q, dq_abs, self.robot, ext.J[: self.task_m], exact, self.active, self.scene,
             self.data,
         )  # fmt: skip
         candidates: list[Candidate] = []

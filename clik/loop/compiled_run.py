@@ -45,6 +45,7 @@ class RunState(Protocol):
     checks: StopChecks
     monitor: ViolationMonitor
     crun: Any
+    goals: Any
     progress: Any
     steps: int
     max_err: float
@@ -69,12 +70,18 @@ def compiled_samples(run: RunState, q: np.ndarray) -> tuple[str, str]:
     tick = max(1, N // 100) if run.progress is not None else N
     k = 0
     stop: tuple[Any, ...] = ("",)
+    goals = run.goals
     while k < N:
         c0, c1, P_d, R_d, FF, at_rest = run.chunks.load(k - k % run.chunks.size)
+        G_ref, G_ff, at_rest = goals.load(c0, at_rest)
         end = min(c1, (k // tick + 1) * tick)
+        a, b = k - c0, end - c0
+        more = (
+            {} if G_ref is None else {"goal_ref": _rows(G_ref, a, b), "goal_ff": _rows(G_ff, a, b)}
+        )
         stop = native.advance(
-            k, end, _rows(P_d, k - c0, end - c0), _rows(R_d, k - c0, end - c0),
-            _rows(FF, k - c0, end - c0), _rows(at_rest, k - c0, end - c0), q,
+            k, end, _rows(P_d, a, b), _rows(R_d, a, b), _rows(FF, a, b), _rows(at_rest, a, b), q,
+            **more,
         )  # fmt: skip
         k = stop[0]
         if stop[1]:
@@ -82,6 +89,9 @@ def compiled_samples(run: RunState, q: np.ndarray) -> tuple[str, str]:
         if run.progress is not None and k < N:
             run.progress(k, N)
     run.steps, run.max_err, run.err = native.steps, native.max_error, native.last_error
+    if goals.rows is not None:
+        goals.rows.largest[:] = native.goal_max
+        goals.rows.last[:] = native.goal_last
     run.rec.j = native.kept
     run.checks.worst_margin = native.worst_margin
     for constraint, kind, t_first, t_last, worst in native.violations:
@@ -103,15 +113,19 @@ def _rows(array: np.ndarray | None, a: int, b: int) -> np.ndarray | None:
 def _engine_run(run: RunState) -> Any:
     """The engine's run, on the run's robot, task, law, checks and record (typed configs)."""
     engine, tr = load(), run.tr
+    more: dict[str, Any] = {}
+    if run.goals.rows is not None:
+        more["goals"] = [g.task.engine_goal(engine) for g in tr.stack.extras]
     return engine.TrackingRun(
         model=run.robot.model,
         task=_task_config(engine, run.task),
-        law=_law_config(engine, tr),
+        law=_law_config(engine, tr, run.goals),
         stop=_stop_config(engine, run.checks.s),
         t=run.t,
-        record=_record_arrays(engine, run.rec),
+        record=_record_arrays(engine, run.rec, run.goals),
         joints=_joint_monitor_config(engine, run.monitor.joints),
         constraints=None if run.cset is None else run.cset.engine_config(),
+        **more,
     )
 
 
@@ -125,18 +139,35 @@ def _task_config(engine: Any, task: Task) -> Any:
     )
 
 
-def _law_config(engine: Any, tr: Any) -> Any:
-    """The tracker's law, gains, rows and joint speed limits as ``_engine.LawConfig``."""
+def _law_config(engine: Any, tr: Any, goals: Any) -> Any:
+    """The tracker's law, gains, rows, levels, objectives and joint speed limits (``LawConfig``)."""
     speed = tr.speed
     vmax = None if speed is None else np.asarray(speed.velocity, dtype=float)
     amax = None
     if speed is not None and speed.acceleration is not None:
         amax = np.asarray(speed.acceleration, dtype=float)
+    more: dict[str, Any] = {}
+    if len(tr.ends) > 1 or goals.objectives:
+        more["levels"] = [int(e) for e in tr.ends]
+        more["objectives"] = [_objective_config(engine, *o) for o in goals.objectives]
     return engine.LawConfig(
         law=tr.law, damping=float(tr.damping), dt=float(tr.dt), beta_max=float(tr.beta_max),
         K_task=np.asarray(tr.K_task, dtype=float), rows=int(tr.rows), alpha=float(tr.alpha),
-        vmax=vmax, amax=amax,
+        vmax=vmax, amax=amax, **more,
     )  # fmt: skip
+
+
+def _objective_config(engine: Any, level: int, objective: Any, setup: dict[str, Any]) -> Any:
+    """One objective of eq. (5) as ``_engine.ObjectiveConfig``."""
+    arrays = {
+        k: np.asarray(v, dtype=float)
+        for k, v in setup.items()
+        if k in ("center", "half_range", "q_ref")
+    }
+    index = {k: [int(i) for i in v] for k, v in setup.items() if k in ("idx_q", "idx_v")}
+    return engine.ObjectiveConfig(
+        kind=objective.kind, gain=float(objective.gain), level=int(level), **index, **arrays
+    )
 
 
 def _stop_config(engine: Any, s: StopSettings) -> Any:
@@ -148,9 +179,10 @@ def _stop_config(engine: Any, s: StopSettings) -> Any:
     )  # fmt: skip
 
 
-def _record_arrays(engine: Any, rec: Recorder) -> Any:
+def _record_arrays(engine: Any, rec: Recorder, goals: Any) -> Any:
     """The Recorder's own arrays (written in place) as ``_engine.RecordArrays``."""
-    return engine.RecordArrays(
+    more = {} if goals.rows is None else {"goal_error": goals.rows.record}
+    return engine.RecordArrays(**more,
         N=rec.N, every=rec.every, idx=rec.idx, q=rec.q, qdot=rec.qdot, qddot=rec.qddot,
         position=rec.position, reference=rec.reference, error=rec.error,
         orientation_error=rec.orientation_error, active=rec.active, distance=rec.distance,

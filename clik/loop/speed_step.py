@@ -76,6 +76,33 @@ class SpeedStep:
         if self.a_dt is not None:
             self.prev[:] = qdot
 
+    def apply_parts(self, qdot: np.ndarray, parts: np.ndarray) -> None:
+        """(S1)-(S3) with law (10)'s levels: the constraints first, then each level in turn.
+
+        ``parts`` (1 + L, nv): the constraint level's part, then each task level's
+        (:func:`clik.loop.levels.prioritized_levels`); ``qdot`` is their sum. (S2) fits
+        level 1's part with the room (S1) left, then level 2's with what is left, and so
+        on: a lower level never slows a higher one. One level: :meth:`apply`'s steps.
+        """
+        if self.a_dt is None:
+            if (np.abs(qdot) <= self.v).all():
+                return
+        elif self._within(qdot):
+            self.prev[:] = qdot
+            return
+        if not np.isfinite(qdot).all():
+            return
+        u = self.box_scale(parts[0]) * parts[0]  # (S1)
+        for part in parts[1:]:  # (S2), level by level
+            u += self.fit(u, part) * part
+        qdot[:] = u
+        if self.a_dt is not None:  # (S3)
+            change = qdot - self.prev
+            qdot[:] = self.prev + accel_scale(change, self.a_dt) * change
+        np.clip(qdot, -self.v, self.v, out=qdot)
+        if self.a_dt is not None:
+            self.prev[:] = qdot
+
     def _within(self, qdot: np.ndarray) -> bool:
         """Whether ``qdot`` is in the speed box and its change within the acceleration bound."""
         if not bool(np.all(np.abs(qdot) <= self.v)):

@@ -24,14 +24,18 @@ from clik.errors import InputError
 from clik.loop.gains import row_gains, stability_margin
 from clik.loop.joint_speed import JointSpeed, JointSpeedBounds
 from clik.loop.laws import LawName, check_law, nonlinear, prioritized, transpose
+from clik.loop.levels import prioritized_levels
 from clik.loop.recording import bytes_per_sample, kept_samples
 from clik.loop.reference_stream import REFERENCE_CHUNK, ReferenceChunks
 from clik.loop.stop_checks import checked_settings
+from clik.loop.task_stack import checked_tasks
 from clik.loop.tracking import ProgressCallback, _Run
 from clik.loop.tracking_status import DEFAULT_SETTLING_TIME, DEFAULT_TOLERANCE, checked_tolerance
 from clik.model.reach import reach_bound
+from clik.objectives.objective import Objective
 from clik.outputs.result import TrackingResult
 from clik.tasks.extended_task import ExtendedTask
+from clik.tasks.goal import Goal
 from clik.tasks.task import Task
 from clik.trajectory import Trajectory, time_grid
 
@@ -100,7 +104,7 @@ class Tracker:
 
     def __init__(
         self,
-        task: Task,
+        task: Task | None = None,
         law: LawName = "transpose",
         gain: float | Sequence[float] = 1000.0,
         dt: float = 1e-3,
@@ -109,11 +113,15 @@ class Tracker:
         constraints: ConstraintSet | None = None,
         engine: str = "compiled",
         joint_speed: JointSpeed | None = JOINT_SPEED,
+        *,
+        tasks: Sequence[Goal] | None = None,
+        objectives: Sequence[Objective] | None = None,
     ) -> None:
         if engine not in ENGINES:
             raise InputError("engine", " or ".join(repr(e) for e in ENGINES), engine)
-        if not isinstance(task, Task):
+        if task is not None and not isinstance(task, Task):
             raise InputError("task", "a clik.Task", type(task).__name__)
+        task, self.stack, self.objectives = checked_tasks(task, tasks, objectives, law, gain)
         task.robot.check_model()
         if constraints is not None and not isinstance(constraints, ConstraintSet):
             raise InputError("constraints", "a ConstraintSet or None", type(constraints).__name__)
@@ -124,7 +132,11 @@ class Tracker:
         self.robot = task.robot
         self.law = check_law(law)
         self.dt = _positive(dt, "dt", "[s]")
-        self.K_task = row_gains(gain, task.m, "gain")
+        self.K_task = row_gains(gain, task.m, "gain") if self.stack is None else self.stack.K
+        self.m = task.m if self.stack is None else self.stack.m
+        """All task rows (the primary task's, then the other tasks')."""
+        self.ends = [task.m] if self.stack is None else self.stack.ends
+        """The end row of each priority level."""
         damping = float(damping)
         if not math.isfinite(damping) or damping < 0.0:
             raise InputError("damping", "a finite number >= 0", damping)
@@ -134,7 +146,9 @@ class Tracker:
             2.0 * self.alpha if beta_max is None else _positive(beta_max, "beta_max", "[1/s]")
         )
         self.constraints = constraints
-        m = task.m
+        if engine == "compiled" and (self.m != task.m or self.leveled):
+            _check_engine_goals()
+        m = self.m
         limit = constraints.row_limit(m, self.law) if constraints is not None else 0
         self.rows = m + limit
         if joint_speed is not None and not isinstance(joint_speed, JointSpeed):
@@ -151,20 +165,34 @@ class Tracker:
         other.joint_speed, other.speed = None, None
         return other
 
+    @property
+    def leveled(self) -> bool:
+        """Whether law (10) runs level by level (several levels, or objectives)."""
+        return self.law == "pseudoinverse" and (len(self.ends) > 1 or bool(self.objectives))
+
     # -- the law -----------------------------------------------------------------------
 
     def law_velocity(
-        self, ext: ExtendedTask, r: int, out: np.ndarray, out_c: np.ndarray | None = None
-    ) -> float:
+        self, ext: ExtendedTask, r: int, out: np.ndarray, out_c: np.ndarray | None = None,
+        parts: np.ndarray | None = None, z: Sequence[tuple[int, np.ndarray]] = (),
+    ) -> float:  # fmt: skip
         """Joint velocity [rad/s] of the law on the first ``r`` rows of the extended task.
 
         ``out_c``: law (10) writes its constraint level's part there (for the speed step).
+        ``parts`` (1 + L, nv) and ``z``, when :attr:`leveled`: law (10) level by level
+        (:func:`clik.loop.levels.prioritized_levels`), the objectives' ``(level, z)``.
 
         Returns:
             Law (10): the fraction of the task's demand the law could not realise
             (:func:`clik.loop.laws.prioritized`); laws (9) and (8): 0.
         """
         m = ext.m
+        if parts is not None:
+            b = ext.demand(r, ext.demand_out[:r])
+            return prioritized_levels(
+                ext.J[:m], b[:m], self.ends, ext.J[m:r], b[m:r], out, self.damping, self.dt,
+                parts, z, budget_blocks=self.speed is None,
+            )  # fmt: skip
         if self.law == "pseudoinverse":
             b = ext.demand(r, ext.demand_out[:r])
             return prioritized(
@@ -182,7 +210,7 @@ class Tracker:
 
     def run(
         self,
-        trajectory: Trajectory,
+        trajectory: Trajectory | None = None,
         q0: np.ndarray | Sequence[float] | None = None,
         *,
         record_every: int = 1,
@@ -204,6 +232,8 @@ class Tracker:
 
         Args:
             trajectory: Desired task trajectory; sampled chunk by chunk on the time grid.
+                None with ``tasks=[...]``: each goal has its own (the run lasts as long
+                as the longest).
             q0: Initial configuration (nq,).
             record_every: Keep every k-th sample (and the last) in the result's arrays, an
                 integer >= 1; scalars such as ``max_task_error`` still see every sample.
@@ -245,7 +275,10 @@ class Tracker:
         robot.check_model()
         q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
         robot.check_within_limits(q, "q0")
+        trajectory = self._primary_trajectory(trajectory)
         duration = self._check_run(trajectory, record_every, progress, settle)
+        if self.stack is not None:
+            duration = max(duration, self.stack.duration())
         self.check_size(duration + settle, int(record_every))
         settings = checked_settings(
             self.dt, deadlock_window=deadlock_window, deadlock_ratio=deadlock_ratio,
@@ -257,8 +290,23 @@ class Tracker:
         chunks, out_of_reach = self._reference(trajectory, t)
         self._warn_stability(q)
         every = min(int(record_every), t.shape[0])  # beyond N: the first and last samples
-        run = _Run(self, t, chunks, every, settings, progress, tol)
+        run = _Run(self, t, chunks, every, settings, progress, tol, q)
         return run.execute(q, out_of_reach)
+
+    def _primary_trajectory(self, trajectory: Trajectory | None) -> Trajectory:
+        """The primary task's trajectory: the one given, or its goal's with ``tasks``."""
+        if self.stack is None:
+            if trajectory is None:
+                raise InputError("trajectory", "the task's trajectory (a clik.trajectory)")
+            return trajectory
+        if trajectory is not None:
+            raise InputError("trajectory", "None with tasks=[...] (each goal has its own)")
+        for goal, name in zip(self.stack.goals, self.stack.names, strict=True):
+            duration = real(getattr(goal.trajectory, "duration", None))
+            if not in_range(duration, 0.0):
+                expected = "a trajectory whose duration is a finite time >= 0 [s]"
+                raise InputError(f"tasks[{name!r}].trajectory.duration", expected, duration)
+        return self.stack.primary.trajectory
 
     def _check_run(
         self, trajectory: Trajectory, record_every: int, progress: object, settle: float
@@ -310,7 +358,7 @@ class Tracker:
         N = round(duration / self.dt) + 1
         cset = self.constraints
         n_obs = 0 if cset is None else len(cset.obstacles)
-        slots = 0 if cset is None else max(cset.row_limit(self.task.m, self.law), 1)
+        slots = 0 if cset is None else max(cset.row_limit(self.m, self.law), 1)
         size = bytes_per_sample(self.robot.nq, self.robot.nv, n_obs, slots)
         if kept_samples(N, record_every) * size <= MAX_RECORD_BYTES:
             return
@@ -363,7 +411,7 @@ class Tracker:
                     stacklevel=3,
                 )
             return
-        margin = stability_margin(self.task.jacobian(q), self.K_task, self.dt)
+        margin = stability_margin(self.task.jacobian(q), self.K_task[: self.task.m], self.dt)
         if margin >= 2.0:
             warnings.warn(
                 f"gain: alpha dt lambda_max(J J^T) = {margin:.3g} >= 2 at q0: explicit Euler "
@@ -373,10 +421,23 @@ class Tracker:
             )
 
 
+def _check_engine_goals() -> None:
+    """Refuse several tasks or objectives with a compiled engine built without them."""
+    from clik.engine import load
+
+    if not hasattr(load(), "FrameGoal"):
+        raise InputError(
+            "engine", "'python' for several tasks or objectives: this build of the compiled "
+            "engine has none (rebuild it: make demo)", "compiled",
+        )  # fmt: skip
+
+
 def track(
-    task: Task,
-    trajectory: Trajectory,
+    task: Task | None = None,
+    trajectory: Trajectory | None = None,
     *,
+    tasks: Sequence[Goal] | None = None,
+    objectives: Sequence[Objective] | None = None,
     q0: np.ndarray | Sequence[float] | None = None,
     law: LawName = "transpose",
     gain: float | Sequence[float] = 1000.0,
@@ -401,10 +462,14 @@ def track(
         >>> task = clik.Task(robot, "tip", "position", axes=["x", "y"])
         >>> q0 = np.radians([180, -30, -90, -30])
         >>> result = clik.track(task, clik.trajectory.Line(...), q0=q0)
+
+    Several tasks (docs/method.md, "Several tasks"): ``tasks=[clik.Goal(task,
+    trajectory, name=..., priority=..., gain=...), ...]`` instead of ``task`` and
+    ``trajectory``, and eq. (5)'s ``objectives=[clik.Objective(...)]`` (law (10)).
     """
     tracker = Tracker(
         task, law=law, gain=gain, dt=dt, damping=damping, constraints=constraints, engine=engine,
-        joint_speed=joint_speed,
+        joint_speed=joint_speed, tasks=tasks, objectives=objectives,
     )  # fmt: skip
     return tracker.run(
         trajectory, q0, record_every=record_every, progress=progress, settle=settle,

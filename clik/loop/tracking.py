@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Protocol
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -29,6 +29,8 @@ from clik.constraints.constraint_run import ConstraintRun
 from clik.constraints.recovery import recovery_clause, recovery_records
 from clik.constraints.violations import JointRange, ViolationMonitor
 from clik.loop.compiled_run import compiled_samples
+from clik.loop.goal_rows import task_errors
+from clik.loop.goal_state import GoalState
 from clik.loop.laws import finite
 from clik.loop.recording import Recorder
 from clik.loop.speed_step import SpeedStep
@@ -42,7 +44,9 @@ if TYPE_CHECKING:
     from clik.loop.joint_speed import JointSpeedBounds
     from clik.loop.laws import LawName
     from clik.loop.reference_stream import ReferenceChunks
+    from clik.loop.task_stack import TaskStack
     from clik.model.robot import Robot
+    from clik.objectives.objective import Objective
     from clik.tasks.task import Task
 
 ProgressCallback = Callable[[int, int], None]
@@ -54,6 +58,13 @@ class TrackerSettings(Protocol):
     task: Task
     robot: Robot
     law: LawName
+    m: int
+    ends: list[int]
+    stack: TaskStack | None
+    objectives: list[Objective]
+
+    @property
+    def leveled(self) -> bool: ...  # noqa: D102
     engine: str
     dt: float
     K_task: np.ndarray
@@ -65,8 +76,9 @@ class TrackerSettings(Protocol):
     speed: JointSpeedBounds | None
 
     def law_velocity(  # noqa: D102
-        self, ext: ExtendedTask, r: int, out: np.ndarray, out_c: np.ndarray | None = None
-    ) -> float: ...
+        self, ext: ExtendedTask, r: int, out: np.ndarray, out_c: np.ndarray | None = None,
+        parts: np.ndarray | None = None, z: Sequence[tuple[int, np.ndarray]] = (),
+    ) -> float: ...  # fmt: skip
 
 
 class _Run:
@@ -89,6 +101,7 @@ class _Run:
         settings: StopSettings,
         progress: ProgressCallback | None,
         tolerance: Tolerance | None = None,
+        q0: np.ndarray | None = None,
     ) -> None:
         self.tr = tracker
         self.tolerance = Tolerance() if tolerance is None else tolerance
@@ -97,7 +110,8 @@ class _Run:
         self.t, self.chunks, self.progress = t, chunks, progress
         self.dt = tracker.dt
         self.N = t.shape[0]
-        m, nv = task.m, robot.nv
+        self.m = m = tracker.m  # every task's rows; the primary's are the first task.m
+        nv = robot.nv
         self.ext = ExtendedTask(m, tracker.rows, nv, tracker.K_task)
         python = tracker.engine == "python"
         self.data: pin.Data  # the run's own (the Python engine's: the compiled one's is in C++)
@@ -114,6 +128,8 @@ class _Run:
                 cset, m, tracker.law, tracker.alpha, t, self.rec.capacity, task.frame_id,
                 task.rows, self.data,
             )  # fmt: skip
+        self.goals = GoalState(tracker, t, chunks.size, self.rec.capacity, q0)
+        self.q = np.zeros(robot.nq)  # this sample's configuration (the objectives read it)
         self.speed_step: SpeedStep | None = None  # the compiled engine's is in C++
         if tracker.speed is not None and python:
             self.speed_step = SpeedStep(tracker.speed, self.dt)
@@ -128,12 +144,20 @@ class _Run:
     def law(self, r: int, out: np.ndarray) -> float:
         """The tracker's law on the first ``r`` rows of this run's extended task."""
         step = self.speed_step
+        goals = self.goals
+        if goals.parts is not None:
+            z = goals.objective_gradients(self.robot.model, self.data, self.ext, self.q)
+            return self.tr.law_velocity(self.ext, r, out, None, goals.parts, z)
         return self.tr.law_velocity(self.ext, r, out, None if step is None else step.c)
 
     def within_speed_limits(self, r: int, qdot: np.ndarray) -> None:
         """The law's ``qdot`` within the joint speed limits, (S1)-(S3), when the run has them."""
         if self.speed_step is not None:
-            self.speed_step.apply(qdot, self.ext, r, self.tr.law == "pseudoinverse")
+            parts = self.goals.parts
+            if parts is not None:
+                self.speed_step.apply_parts(qdot, parts)
+            else:
+                self.speed_step.apply(qdot, self.ext, r, self.tr.law == "pseudoinverse")
 
     # -- one sample, in steps ----------------------------------------------------------
 
@@ -143,7 +167,7 @@ class _Run:
         With constraints every joint's Jacobian is computed: their rows need them.
         """
         model, data, fid = self.robot.model, self.data, self.task.frame_id
-        if self.crun is None:
+        if self.crun is None and self.goals.rows is None and not self.goals.objectives:
             return pin.computeFrameJacobian(model, data, q, fid, LWA)
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacement(model, data, fid)
@@ -212,9 +236,11 @@ class _Run:
         """Keep sample ``k``."""
         placement = self.data.oMf[self.task.frame_id]
         j = self.rec.keep(k, q, qdot, placement.translation, p_d, err, err_rot)
+        if self.goals.rows is not None:
+            self.goals.rows.keep(j)
         if self.crun is not None:
             assert self.rec.active is not None and self.rec.distance is not None
-            self.rec.active[j] = r - self.task.m
+            self.rec.active[j] = r - self.m
             self.rec.distance[j] = self.crun.min_distance
             self.crun.record(j)
 
@@ -251,27 +277,34 @@ class _Run:
 
         Sets :attr:`steps`, :attr:`max_err` and :attr:`err`; returns the status and reason.
         """
-        model, m, dt, N = self.robot.model, self.task.m, self.dt, self.N
+        model, m, dt, N = self.robot.model, self.m, self.dt, self.N
+        goals = self.goals
         crun, rec, t = self.crun, self.rec, self.t
         qdot = np.zeros(self.robot.nv)
         dq = np.zeros(self.robot.nv)
         c0, c1, P_d, R_d, FF, at_rest = self.chunks.load(0)
+        G_ref, G_ff, at_rest = goals.load(0, at_rest)
         progress_every = max(1, N // 100)
         rec.start(q)
         for k in range(N):
             if k == c1:
                 c0, c1, P_d, R_d, FF, at_rest = self.chunks.load(k)
+                G_ref, G_ff, at_rest = goals.load(k, at_rest)
             kk = k - c0
             p_d = None if P_d is None else P_d[kk]
             J6 = self.kinematics(q)
             self.task_rows(J6, p_d, None if R_d is None else R_d[kk], FF[kk])
+            if goals.rows is not None and G_ref is not None and G_ff is not None:
+                goals.rows.fill(model, self.data, q, G_ref[kk], G_ff[kk], self.ext)
+            self.q = q
             exact = rec.due(k)
             r = m if crun is None else m + crun.update(k, q, self.ext, self.law, exact)
             blocked = self.law(r, qdot)
             self.within_speed_limits(r, qdot)
             self.err, err_rot = self.error_norms()
             self.max_err = max(self.max_err, self.err)
-            stop = self.stop(k, qdot, self.err, r, blocked, bool(at_rest[kk]))
+            worst = self.err if goals.rows is None else max(self.err, goals.rows.errors(self.ext))
+            stop = self.stop(k, qdot, worst, r, blocked, bool(at_rest[kk]))
             self.observe_limits(float(t[k]), q)
             if exact or stop is not None:
                 self.record(k, q, qdot, p_d, self.err, err_rot, r)
@@ -326,7 +359,9 @@ class _Run:
             "gain": [float(g) for g in tr.K_task],
             "dt": self.dt,
             "record_every": self.rec.every,
-            "duration": float(self.chunks.trajectory.duration),
+            "duration": float(
+                self.chunks.trajectory.duration if tr.stack is None else tr.stack.duration()
+            ),
             "stability_margin_max": float(self.checks.worst_margin),
             "joint_speed": None if tr.speed is None else tr.speed.as_info(),
         }
@@ -345,28 +380,42 @@ class _Run:
         )
         if self.crun is not None:
             self.crun.finish(result, self.rec.j)
+        self._task_errors(result, max_err, err)
         return result
+
+    def _task_errors(self, result: TrackingResult, max_err: float, err: float) -> None:
+        """Each task's errors by name (``result.task_errors``) and the others' record."""
+        primary: dict[str, Any] = {"max": float(max_err), "final": float(err)}
+        o = result.orientation_error_norm
+        if o is not None and o.size and self.task.has_position:
+            primary["max_orientation"] = float(np.max(o))
+            primary["final_orientation"] = float(o[-1])
+        rows = self.goals.rows
+        result.task_errors = task_errors(self.tr.stack, primary, rows)
+        if rows is not None:
+            result.extra["task_errors"] = rows.record[: self.rec.j].copy()
+            result.info["tasks"] = list(result.task_errors)
 
     # -- reasons -----------------------------------------------------------------------
 
     def active_clause(self, r: int) -> str:
-        if self.crun is None or r == self.task.m:
+        if self.crun is None or r == self.m:
             return ""
         return f"; active constraints: {', '.join(self.crun.active_names())}"
 
     def deadlock_reason(self, tk: float, err: float, r: int, qdot: np.ndarray) -> str:
         """Remark 2, with the task rows that cannot follow and the constraints that block them."""
-        ext, m = self.ext, self.task.m
+        ext, m = self.ext, self.tr.ends[0]  # the first level's rows (lower ones give way)
         b = ext.demand(m, np.zeros(m)) if self.tr.law == "pseudoinverse" else ext.K[:m] * ext.e[:m]
         residual = b - ext.J[:m].dot(qdot)
         size = float(np.abs(residual).max())
-        axes = self.task.axes
+        axes = self.task.axes if self.tr.stack is None else self.tr.stack.row_labels()[:m]
         rows = [axes[i] for i in np.flatnonzero(np.abs(residual) >= 0.3 * size)] if size else axes
         head = (
             f"deadlock at t = {tk:.6g} s: the task error is {err:.4g} and the law cannot reduce "
             f"it (Remark 2); task rows that cannot follow: {', '.join(rows)}"
         )
-        if self.crun is None or r == m:
+        if self.crun is None or r == self.m:
             return head + "; no constraint is active: the task is singular or out of reach"
         wanted = (  # the joint motion the task asks for (an SVD only of finite numbers)
             np.linalg.pinv(ext.J[:m]).dot(residual)
@@ -375,7 +424,7 @@ class _Run:
         )
         blocking = []
         for s, c in enumerate(self.crun.active_rows()):
-            row = ext.J[m + s]
+            row = ext.J[self.m + s]
             scale = float(np.linalg.norm(row) * np.linalg.norm(wanted))
             if scale > 0.0 and float(row.dot(wanted)) < -0.05 * scale:
                 blocking.append(c.key)

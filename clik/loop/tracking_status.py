@@ -178,6 +178,31 @@ def _errors(result: TrackingResult, tol: Tolerance) -> list[tuple[str, str, floa
     out = [("task error", "m", tol.position, result.task_error_norm)]
     if result.orientation_error_norm is not None:
         out.append(("orientation error", "rad", tol.orientation, result.orientation_error_norm))
+    return out + _other_tasks_errors(result, tol)
+
+
+def _other_tasks_errors(
+    result: TrackingResult, tol: Tolerance
+) -> list[tuple[str, str, float, np.ndarray]]:
+    """The recorded errors of the first level's other tasks (lower levels give way)."""
+    record = result.extra.get("task_errors")
+    entries = list(result.task_errors.items())[1:]
+    if record is None or not entries:
+        return []
+    top = min(int(e.get("priority", 1)) for _, e in result.task_errors.items())
+    out = []
+    for i, (name, entry) in enumerate(entries):
+        if int(entry.get("priority", 1)) != top:
+            continue
+        kind = entry.get("kind")
+        if kind in ("orientation", "posture"):
+            unit = "rad" if kind == "orientation" else "rad or m"
+            out.append((f"error of task {name!r}", unit, tol.orientation, record[:, i, 0]))
+            continue
+        out.append((f"error of task {name!r}", "m", tol.position, record[:, i, 0]))
+        if "max_orientation" in entry:
+            label = f"orientation error of task {name!r}"
+            out.append((label, "rad", tol.orientation, record[:, i, 1]))
     return out
 
 

@@ -102,6 +102,12 @@ class TrackingResult:
         extra: Further per-sample arrays: constraint records (``active``, ``witness``,
             ...) and ``manipulability``, the task's ``w`` (D1) at each recorded sample
             [m^p] (:mod:`clik.tasks.manipulability`; filled by :meth:`summary` when missing).
+        task_errors: Each task's errors by name: ``max`` (over every sample) and
+            ``final`` [m or rad] (its position rows', or its only rows'), with
+            ``max_orientation`` and ``final_orientation`` [rad] for a pose task, its
+            ``kind``, ``priority`` and ``task`` in words; a run of one task names it
+            ``"task"``. The other tasks' recorded error norms are in
+            ``extra["task_errors"]`` (N, G, 2).
         velocity_limits: The robot's joint velocity limits per velocity coordinate
             (``model.velocityLimit``) [rad/s or m/s], taken from ``robot`` when not given;
             saved with the result so a loaded result reports the same joint speeds.
@@ -129,6 +135,7 @@ class TrackingResult:
     active_count: np.ndarray | None = None
     info: dict[str, Any] = field(default_factory=dict)
     extra: dict[str, np.ndarray] = field(default_factory=dict)
+    task_errors: dict[str, dict[str, Any]] = field(default_factory=dict)
     robot: Robot | None = field(default=None, repr=False, compare=False)
     velocity_limits: VelocityLimits | None = field(default=None, repr=False, compare=False)
 
@@ -154,6 +161,7 @@ class TrackingResult:
             "joint_max": [float(v) for v in self.joint_max],
             "events": [dict(e) for e in self.events],
             "violations": [dict(v) for v in self.violations],
+            "task_errors": {k: dict(v) for k, v in self.task_errors.items()},
         }
         if self.orientation_error_norm is not None and self.reference_position is not None:
             summary["max_orientation_error"] = float(np.max(self.orientation_error_norm))
@@ -228,6 +236,7 @@ class TrackingResult:
             "events": self.events,
             "violations": self.violations,
             "info": self.info,
+            "task_errors": self.task_errors,
         }
         arrays["meta_json"] = np.array(json.dumps(meta))
         atomic_write(path, lambda f: np.savez_compressed(f, **arrays))

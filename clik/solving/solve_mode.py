@@ -47,19 +47,24 @@ from clik.solving.solve_problem import (
     checked_target,
 )
 from clik.solving.solve_result import SolveResult, converged_reason, failure_reason
+from clik.solving.stack_solve import solve_tasks
 from clik.tasks.task import Task
 
 if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
+    from clik.objectives.objective import Objective
+    from clik.tasks.goal import Goal
 
 EngineName = Literal["compiled", "python"]
 
 
 def solve(
-    task: Task,
-    target: pin.SE3 | np.ndarray | Sequence[float],
+    task: Task | None = None,
+    target: pin.SE3 | np.ndarray | Sequence[float] | None = None,
     q0: np.ndarray | Sequence[float] | None = None,
     *,
+    tasks: Sequence[Goal] | None = None,
+    objectives: Sequence[Objective] | None = None,
     law: LawName = "pseudoinverse",
     step: float = 1.0,
     damping: float = 1e-6,
@@ -102,6 +107,11 @@ def solve(
             See :mod:`clik.solving.constrained_solve`.
         tracking_attempts: With ``constraints``, the starts of the constrained law (10)
             tried when the unconstrained pose misses a constraint.
+        tasks: Several tasks instead of ``task`` and ``target`` (``clik.Goal``, each
+            target its trajectory's final value): every task of the first priority
+            level reaches its target (:mod:`clik.solving.stack_solve`; law (10) by
+            levels, ``step`` its ``K dt``); ``mu`` and ``tracking_attempts`` unused.
+        objectives: With ``tasks``, eq. (5)'s objectives below the levels.
 
     A task and a constraint set may serve solves in several threads at once: each solve
     has its own Pinocchio data and solver.
@@ -111,6 +121,19 @@ def solve(
     """
     if seed is not None and (type(seed) is not int or seed < 0):
         check_seed(seed)  # raises unless a NumPy integer >= 0
+    if tasks is not None or objectives is not None:
+        if task is not None or target is not None or tasks is None:
+            raise InputError("tasks", "either task and target, or tasks (a list of clik.Goal)")
+        if law != "pseudoinverse":
+            raise InputError("law", "'pseudoinverse' (law (10) by levels) with tasks", law)
+        stacked: dict[str, Any] = {
+            "step": step, "damping": damping, "tolerance": tolerance,
+            "orientation_tolerance": orientation_tolerance, "max_iterations": max_iterations,
+            "restarts": restarts, "seed": seed, "engine": engine,
+        }  # fmt: skip
+        return solve_tasks(tasks, q0, stacked, constraints, objectives)
+    if task is None or target is None:
+        raise InputError("task", "a task and a target (or tasks=[clik.Goal, ...])")
     if constraints is not None:
         given: dict[str, Any] = {
             "law": law, "step": step, "damping": damping, "mu": mu, "tolerance": tolerance,

@@ -19,12 +19,13 @@ and Jacobian rows are expressed in the world frame at the frame's origin.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pinocchio as pin
 
 from clik.errors import InputError
+from clik.tasks.kind import BaseTask
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
@@ -41,7 +42,27 @@ _KIND_AXES: dict[str, tuple[int, ...]] = {
 }
 
 
-class Task:
+def frame_rows(kind: str, axes: Sequence[str] | None) -> tuple[int, ...]:
+    """The rows among ``(x, y, z, rx, ry, rz)`` a frame task of ``kind`` keeps.
+
+    Raises:
+        InputError: A bad kind, or axes not among the kind's (named).
+    """
+    if kind not in _KIND_AXES:
+        raise InputError("task.kind", "one of 'position', 'orientation', 'pose'", kind)
+    allowed = _KIND_AXES[kind]
+    if axes is None:
+        return allowed
+    if isinstance(axes, str) or len(axes) == 0:
+        raise InputError("task.axes", "a non-empty list of axis names", axes)
+    valid = [AXES[i] for i in allowed]
+    bad = [a for a in axes if a not in valid]
+    if bad or len(set(axes)) != len(axes):
+        raise InputError("task.axes", f"distinct names among {valid} for a {kind} task", list(axes))
+    return tuple(sorted(AXES.index(a) for a in axes))
+
+
+class Task(BaseTask):
     """A position, orientation or pose task on one frame, with a component mask.
 
     Args:
@@ -65,6 +86,9 @@ class Task:
         m: Task dimension, ``len(rows)``.
     """
 
+    reference_size = 12
+    """A pose per sample: the position (3) [m], then the rotation, row-major (9)."""
+
     def __init__(
         self,
         robot: Robot,
@@ -72,21 +96,7 @@ class Task:
         kind: TaskKind = "pose",
         axes: Sequence[str] | None = None,
     ) -> None:
-        if kind not in _KIND_AXES:
-            raise InputError("task.kind", "one of 'position', 'orientation', 'pose'", kind)
-        allowed = _KIND_AXES[kind]
-        if axes is None:
-            rows = allowed
-        else:
-            if isinstance(axes, str) or len(axes) == 0:
-                raise InputError("task.axes", "a non-empty list of axis names", axes)
-            valid = [AXES[i] for i in allowed]
-            bad = [a for a in axes if a not in valid]
-            if bad or len(set(axes)) != len(axes):
-                raise InputError(
-                    "task.axes", f"distinct names among {valid} for a {kind} task", list(axes)
-                )
-            rows = tuple(sorted(AXES.index(a) for a in axes))
+        rows = frame_rows(kind, axes)
         robot.check_model()
         self.robot = robot
         self.frame = frame
@@ -127,12 +137,7 @@ class Task:
         self, placement: pin.SE3, position_d: np.ndarray | None, rotation_d: np.ndarray | None
     ) -> np.ndarray:
         """Six-vector error ``(p_d - p, log3(R_d R^T))``; missing references give zero rows."""
-        e6 = np.zeros(6)
-        if position_d is not None:
-            e6[:3] = position_d - placement.translation
-        if rotation_d is not None:
-            e6[3:] = pin.log3(rotation_d @ placement.rotation.T)
-        return e6
+        return frame_error(placement, position_d, rotation_d)
 
     def error(
         self, q: np.ndarray, position_d: np.ndarray | None, rotation_d: np.ndarray | None
@@ -148,3 +153,83 @@ class Task:
             robot.model, robot.thread_data(), q, self.frame_id, pin.LOCAL_WORLD_ALIGNED
         )
         return J6[self.rows]
+
+    # -- as one of several tasks (clik.tasks.kind) ---------------------------------------
+
+    def describe(self) -> str:
+        """``"pose of frame 'tool'"``."""
+        return f"{self.kind} of frame {self.frame!r}"
+
+    def reference_arrays(self, ref: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Poses (n, 12) and the rows' velocities (n, m) from a trajectory's samples."""
+        return pose_reference_arrays(self, ref)
+
+    def fill(
+        self, model: pin.Model, data: pin.Data, q: np.ndarray, ref: np.ndarray,
+        J: np.ndarray, e: np.ndarray,
+    ) -> None:  # fmt: skip
+        """Error (6) ``(p_d - p, log3(R_d R^T))`` and Jacobian (3) rows at ``q``."""
+        fid = self.frame_id
+        placement = pin.updateFramePlacement(model, data, fid)
+        e6 = frame_error(
+            placement,
+            ref[:3] if self.has_position else None,
+            ref[3:].reshape(3, 3) if self.has_orientation else None,
+        )
+        np.take(e6, self.rows, out=e)
+        J6 = pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
+        np.take(J6, self.rows, axis=0, out=J)
+
+    def error_norms(self, e: np.ndarray) -> tuple[float, float]:
+        """Norms of the position rows [m] and orientation rows [rad] (see ``BaseTask``)."""
+        return split_norms(self.rows, e)
+
+    def engine_goal(self, engine: Any) -> Any:
+        """``_engine.FrameGoal`` in the world."""
+        return engine.FrameGoal(frame=int(self.frame_id), rows=[int(r) for r in self.rows])
+
+
+def frame_error(
+    placement: pin.SE3, position_d: np.ndarray | None, rotation_d: np.ndarray | None
+) -> np.ndarray:
+    """Six-vector error (6) ``(p_d - p, log3(R_d R^T))``; missing references give zero rows."""
+    e6 = np.zeros(6)
+    if position_d is not None:
+        e6[:3] = position_d - placement.translation
+    if rotation_d is not None:
+        e6[3:] = pin.log3(rotation_d @ placement.rotation.T)
+    return e6
+
+
+def split_norms(rows: np.ndarray, e: np.ndarray) -> tuple[float, float]:
+    """Norms of the position rows (``rows < 3``) and orientation rows of ``e``.
+
+    The first is the orientation's when there is no position row.
+    """
+    pos = rows < 3
+    rot = float(np.linalg.norm(e[~pos]))
+    return (float(np.linalg.norm(e[pos])) if pos.any() else rot), rot
+
+
+def pose_reference_arrays(task: Any, ref: Any) -> tuple[np.ndarray, np.ndarray]:
+    """A frame task's poses (n, 12) and feed-forward (n, m) from a Reference.
+
+    Raises:
+        InputError: The trajectory lacks the position or orientation the task tracks.
+    """
+    P_d, R_d = getattr(ref, "position", None), getattr(ref, "rotation", None)
+    if task.has_position and P_d is None:
+        raise InputError("trajectory", f"a position reference for the {task.kind} task")
+    if task.has_orientation and R_d is None:
+        raise InputError("trajectory", f"an orientation reference for the {task.kind} task")
+    n = ref.t.shape[0]
+    out = np.zeros((n, 12))
+    out[:, 3:] = np.eye(3).ravel()
+    V6 = np.zeros((n, 6))
+    if task.has_position:
+        out[:, :3] = P_d
+        V6[:, :3] = ref.linear_velocity
+    if task.has_orientation:
+        out[:, 3:] = np.reshape(np.asarray(R_d), (n, 9))
+        V6[:, 3:] = ref.angular_velocity
+    return out, np.ascontiguousarray(V6[:, task.rows])

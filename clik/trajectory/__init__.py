@@ -30,6 +30,7 @@ from clik.trajectory.circle import Circle
 from clik.trajectory.function import Function
 from clik.trajectory.grid import time_grid
 from clik.trajectory.hold import Hold
+from clik.trajectory.joint_path import JointPath, JointReference
 from clik.trajectory.line import Line
 from clik.trajectory.pose import PoseTrajectory
 from clik.trajectory.profile import TrapezoidalProfile, trapezoidal_profile
@@ -42,6 +43,8 @@ __all__ = [
     "Circle",
     "Function",
     "Hold",
+    "JointPath",
+    "JointReference",
     "Line",
     "PoseTrajectory",
     "Reference",

@@ -1,0 +1,151 @@
+"""Solve mode with several tasks: every task of the first level reaches its target.
+
+``clik.solve(tasks=[clik.Goal(task, target_trajectory, ...), ...])``: each goal's
+target is its trajectory's final value (a :class:`~clik.trajectory.Hold` pose, a
+:class:`~clik.trajectory.JointPath` posture), held. Law (10) by priority levels
+(docs/method.md, "Several tasks") is iterated on the held targets as a fixed-point
+map, one sample per iteration with ``K dt = step`` (a Gauss-Newton step, each level
+damped near singularities and held to the step budget), by the tracker in the engine
+asked for, without joint speed limits; an attempt ends converged when every task of
+the first level is within the tolerances, else (out of iterations, or stopped by the
+deadlock checks) restarts from a seeded random configuration within the limits.
+Lower levels and objectives shape the pose the first level reaches.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from clik.errors import InputError
+from clik.loop.task_stack import TaskStack
+from clik.loop.tracker import ReachWarning, Tracker
+from clik.solving.solve_result import SolveResult
+from clik.tasks.goal import Goal
+from clik.trajectory.joint_path import JointReference
+from clik.trajectory.reference import Reference
+
+if TYPE_CHECKING:
+    from clik.constraints import ConstraintSet
+    from clik.objectives.objective import Objective
+
+DT = 1e-3
+"""The iteration's time step [s] (only ``K dt = step`` matters)."""
+
+
+class HeldEnd:
+    """A trajectory's final value, held with zero velocity (a solve's target)."""
+
+    def __init__(self, trajectory: Any) -> None:
+        self.trajectory = trajectory
+        self.duration = 0.0
+
+    def sample(self, t: np.ndarray) -> Reference | JointReference:
+        """The final value at every time of ``t``."""
+        t = np.asarray(t, dtype=float)
+        end = self.trajectory.sample(np.full(t.shape, float(self.trajectory.duration)))
+        if isinstance(end, JointReference):
+            return JointReference(t, end.q, np.zeros_like(end.q))
+        lin = None if end.position is None else np.zeros_like(end.position)
+        ang = None if end.rotation is None else np.zeros((t.shape[0], 3))
+        return Reference(t, end.position, lin, end.rotation, ang)
+
+
+def solve_tasks(
+    goals: Sequence[Goal],
+    q0: object,
+    settings: dict[str, Any],
+    constraints: ConstraintSet | None = None,
+    objectives: Sequence[Objective] | None = None,
+) -> SolveResult:
+    """:func:`clik.solve` with several tasks (the module's method).
+
+    Args:
+        goals: The goals; each target is its trajectory's final value.
+        q0: Start configuration (None: the robot's reference).
+        settings: ``solve``'s ``step``, ``damping``, ``tolerance``,
+            ``orientation_tolerance``, ``max_iterations``, ``restarts``, ``seed``, ``engine``.
+        constraints: Constraint rows kept while iterating (law (10): constraints first).
+        objectives: Eq. (5)'s objectives, below the levels.
+
+    Raises:
+        InputError: A bad goal or setting (named).
+    """
+    s = settings
+    stack = TaskStack(goals)
+    held = [
+        Goal(g.task, HeldEnd(g.trajectory), name=n, priority=g.priority)
+        for g, n in zip(stack.goals, stack.names, strict=True)
+    ]
+    for name in ("max_iterations", "restarts"):
+        value = s[name]
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int)
+            or value < (1 if name == "max_iterations" else 0)
+        ):
+            raise InputError(
+                name, "an integer >= 1" if name == "max_iterations" else "an integer >= 0", value
+            )
+    step = float(s["step"])
+    if not (math.isfinite(step) and 0.0 < step < 2.0):
+        raise InputError("step", "a number in (0, 2): K dt of law (10)'s iteration", s["step"])
+    tracker = Tracker(
+        tasks=held, law="pseudoinverse", gain=step / DT, dt=DT, damping=float(s["damping"]),
+        constraints=constraints, engine=s["engine"], joint_speed=None, objectives=objectives,
+    )  # fmt: skip
+    robot = stack.robot
+    q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
+    top = [n for n, lv in zip(stack.names, stack.levels, strict=True) if lv == 1]
+    rng = None
+    iterations, best = 0, (math.inf, q.copy(), math.inf, math.inf, "")
+    start = time.perf_counter()
+    for attempt in range(1, s["restarts"] + 2):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ReachWarning)
+            result = tracker.run(
+                q0=q, settle=s["max_iterations"] * DT, record_every=s["max_iterations"] + 1
+            )
+        iterations += result.steps
+        pos, rot = _largest_errors([result.task_errors[n] for n in top])
+        q_end = result.q[-1].copy()
+        inside = bool(np.all(q_end >= robot.lower - 1e-9) and np.all(q_end <= robot.upper + 1e-9))
+        if pos <= s["tolerance"] and rot <= s["orientation_tolerance"] and inside:
+            reason = f"converged in {iterations} iterations ({len(stack.goals)} tasks)"
+            return SolveResult(
+                True, reason, q_end, iterations, attempt, pos, rot, time.perf_counter() - start
+            )
+        if pos + rot < best[0]:
+            why = "" if inside else "; a joint left its range"
+            best = (pos + rot, q_end, pos, rot, why)
+        if attempt <= s["restarts"]:
+            rng = np.random.default_rng(s["seed"]) if rng is None else rng
+            q = robot.random_configuration(rng)
+    _, q_best, pos, rot, why = best
+    reason = (
+        f"not converged after {s['restarts'] + 1} attempt(s), {iterations} iterations: the "
+        f"first level's largest errors are {pos:.3g} m and {rot:.3g} rad{why}"
+    )
+    return SolveResult(
+        False, reason, q_best, iterations, s["restarts"] + 1, pos, rot, time.perf_counter() - start
+    )
+
+
+def _largest_errors(entries: list[dict[str, Any]]) -> tuple[float, float]:
+    """The largest final position [m] and orientation [rad] errors of ``task_errors`` entries.
+
+    An orientation task's error, and a posture's [rad or m], count as orientation.
+    """
+    pos = rot = 0.0
+    for e in entries:
+        if e["kind"] in ("orientation", "posture"):
+            rot = max(rot, e["final"])
+        else:
+            pos = max(pos, e["final"])
+            rot = max(rot, e.get("final_orientation", 0.0))
+    return pos, rot
