@@ -89,8 +89,11 @@ def test_levels_velocity_refuses_bad_stacks():
 
 def law_config(K, law="pseudoinverse", rows=None, **kw):
     K = np.asarray(K, dtype=float)
-    return E.LawConfig(law=law, damping=0.0, dt=1e-3, beta_max=100.0, K_task=K,
-                       rows=len(K) if rows is None else rows, alpha=float(K.max()), **kw)  # fmt: skip
+    rows = len(K) if rows is None else rows
+    return E.LawConfig(
+        law=law, damping=0.0, dt=1e-3, beta_max=100.0, K_task=K, rows=rows, alpha=float(K.max()),
+        **kw,
+    )  # fmt: skip
 
 
 def record(N, nq, nv, goals=0):
@@ -118,7 +121,7 @@ def make_run(robot, goals, law, N=1, frame="panda_hand", rows=(0, 1, 2), goal_re
     goal_error, rec = record(N, model.nq, model.nv, G)
     run = E.TrackingRun(model=model, task=task, law=law, stop=stop, t=t, record=rec,
                         joints=joints, constraints=None, goals=goals)  # fmt: skip
-    return run, goal_error, t
+    return run, goal_error
 
 
 def test_goal_configs_are_refused_with_the_field(panda):
@@ -159,7 +162,7 @@ def test_goal_configs_are_refused_with_the_field(panda):
 
 def test_advance_requires_the_goals_reference(panda):
     goals = [E.PostureGoal([0, 1], [0, 1], [False, False])]
-    run, goal_error, t = make_run(panda, goals, law_config([1.0] * 5), N=3)
+    run, goal_error = make_run(panda, goals, law_config([1.0] * 5), N=3)
     q = panda.q_reference.copy()
     args = (np.zeros((3, 3)), None, np.zeros((3, 3)), np.zeros(3, dtype=bool), q)
     with pytest.raises(ValueError, match="goal_ref"):
@@ -190,7 +193,7 @@ def test_relative_goal_and_com_jacobians_are_the_errors_derivatives(panda):
     ref_p, ref_R = bMa.translation.copy(), bMa.rotation.copy()
     c = pin.centerOfMass(model, data, q).copy()
     goals = [E.FrameGoal(a, [0, 1, 2, 3, 4, 5], relative_to=b), E.ComGoal([0, 2])]
-    run, goal_error, t = make_run(panda, goals, law_config([1.0] * 11))
+    run, _ = make_run(panda, goals, law_config([1.0] * 11))
     ref = np.concatenate([ref_p, ref_R.ravel(), c])[None]
     run.advance(0, 1, np.zeros((1, 3)), None, np.zeros((1, 3)), np.zeros(1, dtype=bool),
                 q.copy(), goal_ref=ref, goal_ff=np.zeros((1, 8)))  # fmt: skip
@@ -223,11 +226,13 @@ def test_a_stack_converges_and_records_goal_errors(panda):
     objective = E.ObjectiveConfig("joint_centering", 1.0, 2, idx_q=[0], idx_v=[0],
                                   center=np.zeros(1), half_range=np.ones(1))  # fmt: skip
     law = law_config([20.0] * 7, levels=[6, 7], objectives=[objective])
-    run, goal_error, t = make_run(panda, goals, law, N=N)
+    run, goal_error = make_run(panda, goals, law, N=N)
     ref = np.tile(np.concatenate([p4, np.eye(3).ravel(), [q0[6] + 0.3]]), (N, 1))
     q = q0.copy()
-    out = run.advance(0, N, np.tile(p_hand, (N, 1)), None, np.zeros((N, 3)),
-                      np.ones(N, dtype=bool), q, goal_ref=ref, goal_ff=np.zeros((N, 4)))  # fmt: skip
+    P_d, at_rest = np.tile(p_hand, (N, 1)), np.ones(N, dtype=bool)
+    out = run.advance(
+        0, N, P_d, None, np.zeros((N, 3)), at_rest, q, goal_ref=ref, goal_ff=np.zeros((N, 4))
+    )
     assert out[1] == "", out
     assert run.last_error < 1e-4
     assert run.goal_last[0, 0] < 1e-4  # link 4 held where it was
