@@ -356,8 +356,35 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
     lv.rest.noalias() -= Jl * out_;
     lv.A.noalias() = lv.JN * lv.JN.transpose();
     // y = V diag(1 / (max(w_i, eps^2) + lambda_0^2)) V^T rest (damped_solve)
-    bool solved = false;
-    if (!lv.basis) {  // regular case: two Cholesky factorisations, no eigensolver
+    bool solved = false, based = false;
+    const double keep = RANK_TOLERANCE * std::max(scale, 1.0);
+    if (lv.basis) {
+      // Regular case: A - max(eps^2, tol^2) I positive definite, so no eigenvalue is
+      // filtered and every direction is kept; with A = L L^T the rows L^-1 JN are an
+      // orthonormal basis of JN's row space (L^-1 A L^-T = I): the same projector as
+      // the eigenvectors' diag(1 / sqrt(w)) V^T JN, without an eigensolver.
+      lv.S = lv.A;
+      lv.S.diagonal().array() -= std::max(eps2, keep * keep);
+      lv.llt.compute(lv.S);
+      if (lv.llt.info() == Eigen::Success) {
+        lv.S = lv.A;
+        lv.llt.compute(lv.S);
+        if (lv.llt.info() == Eigen::Success && nb_ + n <= B_.rows()) {
+          auto rows = B_.middleRows(nb_, n);
+          rows = lv.JN;
+          lv.llt.matrixL().solveInPlace(rows);
+          if (d2 > 0.0) {
+            lv.S.diagonal().array() += d2;
+            lv.llt.compute(lv.S);
+          }
+          if (lv.llt.info() == Eigen::Success) {
+            lv.y = lv.rest;
+            lv.llt.solveInPlace(lv.y);
+            solved = based = true;
+          }
+        }
+      }
+    } else {  // regular case: two Cholesky factorisations, no eigensolver
       lv.S = lv.A;
       lv.S.diagonal().array() -= eps2;
       lv.llt.compute(lv.S);
@@ -372,7 +399,7 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
         }
       }
     }
-    if (!solved || lv.basis) {
+    if (!solved) {
       lv.eig.compute(lv.A);
       const auto& V = lv.eig.eigenvectors();
       const auto& w = lv.eig.eigenvalues();
@@ -392,10 +419,11 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
       blocked = unrealised_rows(ext, 0, e1, zp_);
     }
     budget(part, s_.dt);
-    if (lv.basis) {  // B gains JN's row space: diag(1 / sqrt(w)) V^T JN above the tolerance
+    if (based) {
+      nb_ += n;  // the rows L^-1 JN written above
+    } else if (lv.basis) {  // B gains JN's row space: diag(1 / sqrt(w)) V^T JN above the tolerance
       const auto& V = lv.eig.eigenvectors();
       const auto& w = lv.eig.eigenvalues();
-      const double keep = RANK_TOLERANCE * std::max(scale, 1.0);
       for (int i = 0; i < n; ++i) {
         if (w[i] > keep * keep && nb_ < B_.rows()) {
           B_.row(nb_).noalias() = V.col(i).transpose() * lv.JN;
