@@ -70,7 +70,8 @@ Law::Law(const LawSettings& settings, int rows, int nv)
 }
 
 Law::Level::Level(int n, int nv)
-    : JN(n, nv), T(n, nv), A(n, n), S(n, n), rest(n), y(n), tmp(n), eig(n), llt(n) {}
+    : JN(n, nv), T(n, nv), A(n, n), S(n, n), H(nv, nv), Hs(nv, nv), rest(n), y(n), tmp(n),
+      eig(n), llt(n), lltv(nv) {}
 
 Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& plan)
     : Law(settings, rows, nv) {
@@ -399,6 +400,31 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
         }
       }
     }
+    Eigen::Map<Vec> part(parts_.row(1 + l).data(), nv);
+    bool direct = false;  // part written in joint space
+    if (!solved && !lv.basis) {
+      // JN JN^T singular (JN's rows in B's null space, or more rows than joints): in joint
+      // space, JN^T f(JN JN^T) = f(JN^T JN) JN^T (f the filter of damped_solve, on the
+      // nonzero eigenvalues; the zero ones give nothing either way). H = JN^T JN + c B^T B
+      // lifts B's directions, which JN^T rest does not reach, to c >= eps^2; when H is
+      // regular (every eigenvalue >= eps^2) part = (H + lambda_0^2 I)^-1 JN^T rest.
+      const double c = std::max({scale * scale, eps2, 1.0});
+      lv.H.noalias() = lv.JN.transpose() * lv.JN;
+      if (nb_ > 0) lv.H.noalias() += c * (B_.topRows(nb_).transpose() * B_.topRows(nb_));
+      lv.Hs = lv.H;
+      lv.Hs.diagonal().array() -= eps2;
+      lv.lltv.compute(lv.Hs);
+      if (lv.lltv.info() == Eigen::Success) {
+        lv.Hs = lv.H;
+        lv.Hs.diagonal().array() += d2;
+        lv.lltv.compute(lv.Hs);
+        if (lv.lltv.info() == Eigen::Success) {
+          part.noalias() = lv.JN.transpose() * lv.rest;
+          lv.lltv.solveInPlace(part);
+          solved = direct = true;
+        }
+      }
+    }
     if (!solved) {
       lv.eig.compute(lv.A);
       const auto& V = lv.eig.eigenvectors();
@@ -412,8 +438,7 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
       lv.tmp.noalias() = V * lv.y;
       lv.y = lv.tmp;
     }
-    Eigen::Map<Vec> part(parts_.row(1 + l).data(), nv);
-    part.noalias() = lv.JN.transpose() * lv.y;
+    if (!direct) part.noalias() = lv.JN.transpose() * lv.y;
     if (l == 0 && !s_.budget_blocks) {  // measured on the law's own demand
       zp_ = out_ + part;
       blocked = unrealised_rows(ext, 0, e1, zp_);

@@ -99,9 +99,10 @@ class Law {
   struct Level {
     Level(int n, int nv);
     Eigen::MatrixXd JN, T, A, S;  // J_l N (n, nv); J_l B^T (n, nv); JN JN^T, its shift (n, n)
+    Eigen::MatrixXd H, Hs;        // JN^T JN + c B^T B, its shift (nv, nv): the joint-space solve
     Vec rest, y, tmp;
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;
-    Eigen::LLT<Eigen::MatrixXd> llt;
+    Eigen::LLT<Eigen::MatrixXd> llt, lltv;
     bool basis = false;  // extends B (a level above another, or with objectives)
   };
   bool by_levels_ = false;
