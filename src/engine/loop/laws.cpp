@@ -355,11 +355,19 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
     }
     lv.rest = bl;
     lv.rest.noalias() -= Jl * out_;
-    lv.A.noalias() = lv.JN * lv.JN.transpose();
+    // JN JN^T, computed when a solve needs it (a level of more rows than the joints B
+    // leaves free is singular for sure: solved in joint space without it)
+    bool have_A = false;
+    auto gram_A = [&] {
+      if (!have_A) lv.A.noalias() = lv.JN * lv.JN.transpose();
+      have_A = true;
+    };
+    const bool rank_short = n > nv - nb_;
     // y = V diag(1 / (max(w_i, eps^2) + lambda_0^2)) V^T rest (damped_solve)
     bool solved = false, based = false;
     const double keep = RANK_TOLERANCE * std::max(scale, 1.0);
     if (lv.basis) {
+      gram_A();
       // Regular case: A - max(eps^2, tol^2) I positive definite, so no eigenvalue is
       // filtered and every direction is kept; with A = L L^T the rows L^-1 JN are an
       // orthonormal basis of JN's row space (L^-1 A L^-T = I): the same projector as
@@ -385,7 +393,8 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
           }
         }
       }
-    } else {  // regular case: two Cholesky factorisations, no eigensolver
+    } else if (!rank_short) {  // regular case: two Cholesky factorisations, no eigensolver
+      gram_A();
       lv.S = lv.A;
       lv.S.diagonal().array() -= eps2;
       lv.llt.compute(lv.S);
@@ -426,6 +435,7 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
       }
     }
     if (!solved) {
+      gram_A();
       lv.eig.compute(lv.A);
       const auto& V = lv.eig.eigenvectors();
       const auto& w = lv.eig.eigenvalues();
