@@ -240,3 +240,85 @@ def test_a_stack_converges_and_records_goal_errors(panda):
     assert (run.goal_max >= run.goal_last).all()
     np.testing.assert_allclose(goal_error[-1], run.goal_last)
     np.testing.assert_allclose(goal_error.max(axis=0), run.goal_max)
+
+
+# -- nothing allocated per sample ---------------------------------------------------------
+
+COUNTER = r"""
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <stddef.h>
+static void* (*real_malloc)(size_t) = 0;
+static long counting = 0, count = 0;
+void* malloc(size_t n) {
+  if (!real_malloc) real_malloc = dlsym(RTLD_NEXT, "malloc");
+  if (counting) __atomic_add_fetch(&count, 1, __ATOMIC_RELAXED);
+  return real_malloc(n);
+}
+void count_start(void) { count = 0; counting = 1; }
+long count_stop(void) { counting = 0; return count; }
+"""
+
+ALLOCATIONS = r"""
+import ctypes, sys
+import numpy as np
+import pinocchio as pin
+import clik
+from clik.engine import load
+from tests.loop.test_levels_engine import law_config, make_run
+
+E = load()
+lib = ctypes.CDLL(sys.argv[1])
+lib.count_stop.restype = ctypes.c_long
+robot = clik.Robot.load("panda")
+model, q0 = robot.model, robot.q_reference.copy()
+data = model.createData()
+pin.framesForwardKinematics(model, data, q0)
+hand, link4 = robot.frame_id("panda_hand"), robot.frame_id("panda_link4")
+bMa = data.oMf[link4].actInv(data.oMf[hand])
+c = pin.centerOfMass(model, data, q0)
+goals = [E.FrameGoal(hand, [0, 1, 2], relative_to=link4), E.ComGoal([0, 1]),
+         E.PostureGoal(list(range(7)), list(range(7)), [False] * 7)]
+objectives = [E.ObjectiveConfig("manipulability", 0.1, 2),
+              E.ObjectiveConfig("posture", 1.0, 1, q_ref=q0),
+              E.ObjectiveConfig("joint_centering", 1.0, 2, idx_q=[0], idx_v=[0],
+                                center=np.zeros(1), half_range=np.ones(1))]
+ref = np.concatenate([bMa.translation, bMa.rotation.ravel(), c, q0[:7] + 0.2])
+counts = []
+for N in (50, 100, 200):  # the first: a warm-up (first calls allocate caches)
+    vmax = np.full(model.nv, 0.3)
+    law = law_config([10.0] * 15, levels=[8, 15], objectives=objectives, vmax=vmax)
+    run, _ = make_run(robot, goals, law, N=N)
+    q = q0.copy()
+    args = (np.tile(data.oMf[hand].translation + 0.02, (N, 1)), None, np.zeros((N, 3)),
+            np.ones(N, dtype=bool), q)
+    lib.count_start()
+    out = run.advance(0, N, *args, goal_ref=np.tile(ref, (N, 1)), goal_ff=np.zeros((N, 12)))
+    counts.append(lib.count_stop())
+    assert out[1] == "", out
+print(counts[2] - counts[1])
+"""
+
+
+def test_nothing_is_allocated_per_sample(tmp_path):
+    """Two levels, a relative, a CoM and a posture goal, three objectives, speed limits."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    if shutil.which("gcc") is None or os.environ.get("LD_PRELOAD"):
+        pytest.skip("needs gcc and no other LD_PRELOAD (the sanitizer's)")
+    source = tmp_path / "count.c"
+    source.write_text(COUNTER)
+    library = tmp_path / "libcount.so"
+    subprocess.run(["gcc", "-O2", "-shared", "-fPIC", str(source), "-o", str(library), "-ldl"],
+                   check=True)  # fmt: skip
+    script = tmp_path / "allocations.py"
+    script.write_text(ALLOCATIONS)
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "LD_PRELOAD": str(library), "PYTHONPATH": str(root)}
+    done = subprocess.run([sys.executable, str(script), str(library)], env=env, cwd=root,
+                          capture_output=True, text=True, check=True)  # fmt: skip
+    assert int(done.stdout.split()[-1]) == 0, done.stdout

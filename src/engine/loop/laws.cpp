@@ -71,7 +71,7 @@ Law::Law(const LawSettings& settings, int rows, int nv)
 
 Law::Level::Level(int n, int nv)
     : JN(n, nv), T(n, nv), A(n, n), S(n, n), H(nv, nv), Hs(nv, nv), rest(n), y(n), tmp(n),
-      eig(n), llt(n), lltv(nv) {}
+      eig(n > MAX_EIGEN_ROWS ? n : 0), eig_small(n <= MAX_EIGEN_ROWS ? n : 0), llt(n), lltv(nv) {}
 
 Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& plan)
     : Law(settings, rows, nv) {
@@ -434,19 +434,37 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
         }
       }
     }
-    if (!solved) {
+    if (!solved) {  // the eigenpairs of JN JN^T (damping band, or a basis level not regular)
       gram_A();
-      lv.eig.compute(lv.A);
-      const auto& V = lv.eig.eigenvectors();
-      const auto& w = lv.eig.eigenvalues();
-      for (int i = 0; i < n; ++i) {
-        const double wi = std::max(w[i], eps2) + d2;
-        lv.tmp[i] = wi > 0.0 ? wi : std::numeric_limits<double>::infinity();
+      auto by_eigenpairs = [&](auto& eig) {
+        eig.compute(lv.A);
+        const auto& V = eig.eigenvectors();
+        const auto& w = eig.eigenvalues();
+        for (int i = 0; i < n; ++i) {
+          const double wi = std::max(w[i], eps2) + d2;
+          lv.tmp[i] = wi > 0.0 ? wi : std::numeric_limits<double>::infinity();
+        }
+        lv.y.noalias() = V.transpose() * lv.rest;
+        lv.y.array() /= lv.tmp.array();
+        lv.tmp.noalias() = V * lv.y;
+        lv.y = lv.tmp;
+        if (!lv.basis) return;
+        // B gains JN's row space: diag(1 / sqrt(w)) V^T JN above the tolerance
+        for (int i = 0; i < n; ++i) {
+          if (w[i] > keep * keep && nb_ < B_.rows()) {
+            B_.row(nb_).noalias() = V.col(i).transpose() * lv.JN;
+            B_.row(nb_) /= std::sqrt(w[i]);
+            ++nb_;
+          }
+        }
+      };
+      // A fixed-capacity solver allocates nothing (Eigen's dynamic one allocates a
+      // workspace in each tridiagonalisation).
+      if (n <= MAX_EIGEN_ROWS) {
+        by_eigenpairs(lv.eig_small);
+      } else {
+        by_eigenpairs(lv.eig);
       }
-      lv.y.noalias() = V.transpose() * lv.rest;
-      lv.y.array() /= lv.tmp.array();
-      lv.tmp.noalias() = V * lv.y;
-      lv.y = lv.tmp;
     }
     if (!direct) part.noalias() = lv.JN.transpose() * lv.y;
     if (l == 0 && !s_.budget_blocks) {  // measured on the law's own demand
@@ -454,19 +472,7 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
       blocked = unrealised_rows(ext, 0, e1, zp_);
     }
     budget(part, s_.dt);
-    if (based) {
-      nb_ += n;  // the rows L^-1 JN written above
-    } else if (lv.basis) {  // B gains JN's row space: diag(1 / sqrt(w)) V^T JN above the tolerance
-      const auto& V = lv.eig.eigenvectors();
-      const auto& w = lv.eig.eigenvalues();
-      for (int i = 0; i < n; ++i) {
-        if (w[i] > keep * keep && nb_ < B_.rows()) {
-          B_.row(nb_).noalias() = V.col(i).transpose() * lv.JN;
-          B_.row(nb_) /= std::sqrt(w[i]);
-          ++nb_;
-        }
-      }
-    }
+    if (based) nb_ += n;  // the rows L^-1 JN written above
     for (size_t o = 0; o < zlevel_.size(); ++o) {  // N z = z - B^T B z, within the budget
       if (zlevel_[o] != l + 1) continue;
       zp_ = z_[o];

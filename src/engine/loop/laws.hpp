@@ -15,6 +15,11 @@ namespace clik {
 
 // Damping starts when a singular value falls below this fraction of sigma_max(J).
 constexpr double CONDITION_RATIO = 0.01;
+// A level of law (10) of at most this many rows has a fixed-capacity eigensolver, which
+// allocates nothing (Eigen's dynamic one allocates in each tridiagonalisation).
+constexpr int MAX_EIGEN_ROWS = 48;
+using EigenMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor,
+                               MAX_EIGEN_ROWS, MAX_EIGEN_ROWS>;
 // Largest joint step [rad or m] each level of law (10) may ask for in one sample.
 constexpr double STEP_BUDGET = 0.02;
 // A constraint direction counts above this singular value, relative to max(scale, 1).
@@ -101,7 +106,8 @@ class Law {
     Eigen::MatrixXd JN, T, A, S;  // J_l N (n, nv); J_l B^T (n, nv); JN JN^T, its shift (n, n)
     Eigen::MatrixXd H, Hs;        // JN^T JN + c B^T B, its shift (nv, nv): the joint-space solve
     Vec rest, y, tmp;
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;   // levels of more rows
+    Eigen::SelfAdjointEigenSolver<EigenMat> eig_small;  // levels of at most MAX_EIGEN_ROWS
     Eigen::LLT<Eigen::MatrixXd> llt, lltv;
     bool basis = false;  // extends B (a level above another, or with objectives)
   };
