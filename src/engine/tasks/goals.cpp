@@ -37,8 +37,8 @@ void check_rows(const std::vector<int>& rows, int n, const std::string& who) {
 
 double wrap_angle(double x) {
   constexpr double pi = 3.14159265358979323846, two_pi = 2.0 * pi;
-  double r = std::fmod(x + pi, two_pi);
-  if (r <= 0.0) r += two_pi;
+  double r = std::fmod(x + pi, two_pi);  // np.remainder(x + pi, 2 pi) - pi, as in Python
+  if (r < 0.0) r += two_pi;
   return r - pi;
 }
 

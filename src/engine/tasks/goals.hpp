@@ -110,7 +110,7 @@ class ComGoalRun {
 
 using GoalRun = std::variant<FrameGoalRun, PostureGoalRun, ComGoalRun>;
 
-// The angle x wrapped into (-pi, pi].
+// The angle x wrapped into [-pi, pi) (clik/tasks/posture_task.py's np.remainder).
 double wrap_angle(double x);
 
 // One run's goals, in row order.
