@@ -59,6 +59,7 @@ def print_summary(name: str, summary: dict) -> None:
         f"max tracking error {_number(summary['max_task_error'], '.3e')} {unit}, "
         f"final {_number(summary['final_task_error'], '.3e')} {unit}"
     )
+    print_task_errors(summary)
     if summary.get("min_obstacle_distance") is not None:
         print(f"  min link-obstacle distance {summary['min_obstacle_distance']:.4f} m")
     ratio = summary.get("max_velocity_ratio")
@@ -76,6 +77,32 @@ def print_summary(name: str, summary: dict) -> None:
                 f"{e['action']} {e['constraint']} @ {e['t']:.3f}s" for e in summary["events"]
             )
         )
+
+
+def print_task_errors(summary: dict) -> None:
+    """One line per task of a several-task run: name, kind, priority, max and final errors.
+
+    A run of one task (``task_errors`` is ``{"task": ...}``) says nothing more. Units:
+    ``info["task_units"]`` (the scenario's run), else [rad] for an orientation task and
+    [m] for the others; a pose task adds its orientation rows' errors [rad].
+    """
+    errors = summary.get("task_errors") or {}
+    if list(errors) in ([], ["task"]):
+        return
+    units = summary["info"].get("task_units", {})
+    width = max(len(name) for name in errors)
+    for name, e in errors.items():
+        unit = units.get(name, "rad" if e.get("kind") == "orientation" else "m")
+        line = (
+            f"  task {name:<{width}}  {e.get('kind', '?'):<11} priority {e.get('priority', '?')}"
+            f"  max {_number(e['max'], '.3e')} {unit}, final {_number(e['final'], '.3e')} {unit}"
+        )
+        if "max_orientation" in e:
+            line += (
+                f"; orientation max {_number(e['max_orientation'], '.3e')} rad, "
+                f"final {_number(e['final_orientation'], '.3e')} rad"
+            )
+        print(line)
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
