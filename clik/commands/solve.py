@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tqdm import tqdm
 
@@ -19,6 +20,9 @@ from clik.outputs.export import FORMATS, check_exportable
 from clik.outputs.io import output_errors
 from clik.outputs.out_folder import output_folder
 from clik.outputs.result import FAILED_STATUSES, TrackingResult, write_outputs
+
+if TYPE_CHECKING:
+    from clik.tasks.goal import Goal
 
 
 class ProgressBar:
@@ -124,7 +128,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         result = run.execute(ProgressBar(run.scenario.name, None if not args.quiet else False))
         with output_errors(out):
             summary = write_outputs(result, work)
-            written = write_extras(args, result, work, run.scenario.name)
+            written = write_extras(args, result, work, run.scenario.name, run.goals)
     extras = [out / p.relative_to(work) for p in written]
     if not args.quiet:
         print_summary(run.scenario.name, summary)
@@ -135,9 +139,13 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
 
 def write_extras(
-    args: argparse.Namespace, result: TrackingResult, out: Path, name: str
-) -> list[Path]:
-    """``--export``, ``--html`` and ``--plots`` of ``clik solve``; the exported files."""
+    args: argparse.Namespace, result: TrackingResult, out: Path, name: str,
+    goals: Sequence[Goal] = (),
+) -> list[Path]:  # fmt: skip
+    """``--export``, ``--html`` and ``--plots`` of ``clik solve``; the exported files.
+
+    ``goals``: a several-task scenario's tasks, whose references and trails the view draws.
+    """
     written: list[Path] = []
     if args.export:
         every = 1 if args.export_every is None else args.export_every
@@ -145,11 +153,12 @@ def write_extras(
     if args.html:
         from clik.viz import export_html
 
-        export_html(result, out / "scene.html")
+        several = list(goals) if len(goals) > 1 else None
+        written.append(export_html(result, out / "scene.html", tasks=several))
     if args.plots:
         from clik.plot import save_result_plots
 
-        save_result_plots([result], out, [name])
+        written += save_result_plots([result], out, [name])
     return written
 
 
