@@ -164,7 +164,7 @@ void bind_set(nb::module_& m) {
           "row_limit",
           [](const ConstraintSetConfig& c, int m_rows, const std::string& law) {
             c.require_unchanged();
-            require(m_rows >= 1 && m_rows <= MAX_TASK_ROWS, "row_limit: m, 1 to 6 task rows");
+            require(m_rows >= 1, "row_limit: m, at least 1 task row");
             return c.row_limit(m_rows, law_kind(law));
           },
           nb::arg("m"), nb::arg("law"), "The bound on active rows (ConstraintSet.row_limit).");

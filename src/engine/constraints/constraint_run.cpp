@@ -43,8 +43,8 @@ const char* action_name(EventAction action) {
 
 ConstraintRun::ConstraintRun(const ConstraintSetConfig& config, const pinocchio::Model& model,
                              int m, LawKind law, double alpha, const TimesView& t, int n_rec,
-                             int frame, std::vector<int> task_rows)
-    : cfg_(config), model_(model), m_(m), law_(law), alpha_(alpha), t_(t) {
+                             int frame, std::vector<int> task_rows, int task_m)
+    : cfg_(config), model_(model), m_(m), task_m_(task_m < 0 ? m : task_m), law_(law), alpha_(alpha), t_(t) {
   if (cfg_.model == nullptr || model.nv != cfg_.model->nv || model.nq != cfg_.model->nq) {
     throw std::invalid_argument("ConstraintRun: the model is not the constraint set's robot");
   }
@@ -53,7 +53,7 @@ ConstraintRun::ConstraintRun(const ConstraintSetConfig& config, const pinocchio:
   if (cfg_.scene) scene_.emplace(*cfg_.scene);
 
   // The kinds, in the set's order; their keys' names, in the same order.
-  const KindSetup base{model,  -1, m, t_, n_rec, frame, task_rows, cfg_.monitor_margin,
+  const KindSetup base{model,  -1, m, task_m_, t_, n_rec, frame, task_rows, cfg_.monitor_margin,
                        scene_ ? &*scene_ : nullptr};
   kinds_.reserve(cfg_.kinds.size());
   for (const KindConfig& kind : cfg_.kinds) {
@@ -107,7 +107,7 @@ int ConstraintRun::update(int k, const Eigen::Ref<const Vec>& q, pinocchio::Data
     dq_abs = &dq_;
   }
   ScenePlacement scene(scene_ ? &*scene_ : nullptr, model_, data, tk);
-  Sample s{tk, q, model_, data, dq_abs, ext, m_, exact, is_active_, active_, scene};
+  Sample s{tk, q, model_, data, dq_abs, ext, m_, task_m_, exact, is_active_, active_, scene};
   min_distance_ = INF;
   for (KindRun& kind : kinds_) {
     std::visit(

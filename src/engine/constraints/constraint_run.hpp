@@ -72,9 +72,12 @@ class ConstraintRun {
  public:
   // Throws std::invalid_argument when the model is not the config's robot, or a kind
   // cannot run (e.g. a dexterity row without the task's frame and rows).
+  // m: every task row (the primary's and the extra goals'), the constraint rows' offset;
+  // task_m: the primary task's rows (0 .. task_m), those of `frame` and `task_rows`
+  // (-1: m, a run with one task).
   ConstraintRun(const ConstraintSetConfig& config, const pinocchio::Model& model, int m,
                 LawKind law, double alpha, const TimesView& t, int n_rec, int frame = -1,
-                std::vector<int> task_rows = {});
+                std::vector<int> task_rows = {}, int task_m = -1);
   // The kinds point into the run's own copy of the config and scene: neither copied nor moved.
   ConstraintRun(const ConstraintRun&) = delete;
   ConstraintRun& operator=(const ConstraintRun&) = delete;
@@ -125,7 +128,7 @@ class ConstraintRun {
 
   const ConstraintSetConfig cfg_;
   const pinocchio::Model& model_;
-  int m_;
+  int m_, task_m_;
   LawKind law_;
   double alpha_;
   int limit_;

@@ -63,7 +63,7 @@ void DexterityRow::gradient(const pinocchio::Model& model, pinocchio::Data& data
 namespace {
 
 DexterityRow row_of(const KindSetup& setup) {
-  if (setup.frame < 0 || static_cast<int>(setup.task_rows.size()) != setup.m) {
+  if (setup.frame < 0 || static_cast<int>(setup.task_rows.size()) != setup.task_m) {
     throw std::invalid_argument("ConstraintRun: the dexterity row needs the task's frame and rows");
   }
   return DexterityRow(setup.model, setup.frame, setup.task_rows);
@@ -82,7 +82,7 @@ void Dexterity::names(std::vector<std::string>& out) {
 // DexterityRun.evaluate: the error (D2) of the task rows; a candidate when positive or active.
 void Dexterity::evaluate(Sample& s, std::vector<Candidate>& out) {
   const double thr = cfg_.threshold;
-  const double e = thr - row_.evaluate(s.ext.J.topRows(s.m));
+  const double e = thr - row_.evaluate(s.ext.J.topRows(s.task_m));
   if (e > 0.0 || s.is_active[base_]) {
     Candidate c;
     c.key = base_;

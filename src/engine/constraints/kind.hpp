@@ -76,7 +76,8 @@ struct Candidate {
 struct KindSetup {
   const pinocchio::Model& model;  // the robot (outlives the run)
   int slot;                       // the kind's index among the run's kinds
-  int m;                          // task rows
+  int m;                          // task rows of every goal: the constraint rows' offset
+  int task_m;                     // the primary task's rows 0..task_m (its frame, task_rows)
   const TimesView& t;             // the run's time grid [s]
   int n_rec;                      // recorded samples
   int frame;                      // the task's frame (-1: none given)
@@ -123,7 +124,8 @@ struct Sample {
   pinocchio::Data& data;              // kinematics and joint Jacobians at q
   const Vec* dq_abs;                  // |dq| since the previous sample (nv); null at the first
   const ExtendedTask& ext;            // its task rows 0..m are written (J, e, ff)
-  int m;
+  int m;                              // task rows of every goal (constraint rows follow)
+  int task_m;                         // the primary task's rows 0..task_m
   bool exact;                         // this sample is recorded: distances made exact
   const std::vector<char>& is_active; // by key
   const std::vector<Candidate>& active;  // the active constraints, in row order

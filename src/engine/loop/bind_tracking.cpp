@@ -14,6 +14,7 @@
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/variant.h>
 #include <nanobind/stl/vector.h>
 
 #include "bindings.hpp"
@@ -47,6 +48,7 @@ struct RecordArrays {
   std::optional<Array<std::int16_t>> active;
   std::optional<Array<double>> distance;
   Array<double> joint_min, joint_max, qdot_prev;
+  std::optional<Array<double>> goal_error;  // (n, G, 2): each goal's error norms
 
   long capacity() const { return static_cast<long>(idx.shape(0)); }
   long nq() const { return static_cast<long>(q.shape(1)); }
@@ -67,12 +69,15 @@ struct RecordArrays {
         (!reference || shaped(*reference, n, 3)) &&
         (!orientation_error || shaped(*orientation_error, n, -1)) &&
         (!active || shaped(*active, n, -1)) && (!distance || shaped(*distance, n, -1)) &&
-        shaped(joint_min, nq(), -1) && shaped(joint_max, nq(), -1) && shaped(qdot_prev, nv(), -1);
+        shaped(joint_min, nq(), -1) && shaped(joint_max, nq(), -1) && shaped(qdot_prev, nv(), -1) &&
+        (!goal_error || (goal_error->ndim() == 3 && static_cast<long>(goal_error->shape(0)) == n &&
+                         goal_error->shape(2) == 2));
     if (!ok) {
       throw std::invalid_argument(
           "RecordArrays: idx (n,), q (n, nq), qdot and qddot (n, nv), position and reference "
           "(n, 3), error, orientation_error, active and distance (n,), joint_min and joint_max "
-          "(nq,), qdot_prev (nv,), with n >= the samples kept of N every `every`");
+          "(nq,), qdot_prev (nv,), goal_error (n, G, 2), with n >= the samples kept of N every "
+          "`every`");
     }
   }
 
@@ -96,6 +101,8 @@ struct RecordArrays {
     b.joint_min = joint_min.data();
     b.joint_max = joint_max.data();
     b.qdot_prev = qdot_prev.data();
+    b.goal_error = goal_error ? goal_error->data() : nullptr;
+    b.goals = goal_error ? static_cast<int>(goal_error->shape(1)) : 0;
     return b;
   }
 };
@@ -127,8 +134,16 @@ struct PyTrackingRun {
 void make_run(PyTrackingRun* self, nb::object model, const TaskConfig& task,
               const LawConfig& law, const StopConfig& stop, In<double> t,
               const RecordArrays& record, JointMonitorConfig joints,
-              const std::optional<ConstraintSetConfig>& constraints) {
+              const std::optional<ConstraintSetConfig>& constraints,
+              const std::vector<GoalConfig>& goals) {
   const pinocchio::Model& m = borrow_model(model.ptr());
+  // The goals' rows (checked against the model: Goals throws naming the goal and field).
+  const Goals goal_rows(m, goals);
+  const int m0 = static_cast<int>(task.rows.size());
+  const int m_all = m0 + goal_rows.rows();
+  require(!record.goal_error || static_cast<int>(record.goal_error->shape(1)) == goal_rows.count(),
+          "RecordArrays: goal_error (n, G, 2), G the run's goals (" +
+              std::to_string(goal_rows.count()) + ")");
   if (t.ndim() != 1 || static_cast<long>(t.shape(0)) != record.N || record.nq() != m.nq ||
       record.nv() != m.nv) {
     throw std::invalid_argument("TrackingRun: t (N,) and the record's nq, nv are the model's");
@@ -143,36 +158,37 @@ void make_run(PyTrackingRun* self, nb::object model, const TaskConfig& task,
   const TimesView times(t.data(), static_cast<Eigen::Index>(t.shape(0)));
   std::unique_ptr<ConstraintRun> crun;
   if (constraints) {
-    const int m_rows = static_cast<int>(task.rows.size());
+    const int m_rows = m_all;
     require(ModelShape::of(*constraints->model) == ModelShape::of(m),
             "TrackingRun: the constraints are on a pin.Model of other sizes than the task's");
     crun = std::make_unique<ConstraintRun>(*constraints, m, m_rows, law.settings.kind, law.alpha,
                                            times, static_cast<int>(record.capacity()), task.frame,
-                                           task.rows);
+                                           task.rows, m0);
     if (m_rows + std::max(crun->limit(), 0) > law.rows) {
       throw std::invalid_argument(
           "LawConfig.rows: fewer than the task's and the constraints' rows");
     }
   }
   // The extended task's room: the task's rows and at most one row per joint more.
-  require(law.rows <= static_cast<int>(task.rows.size()) + std::max(m.nv, 0),
-          "LawConfig.rows: at most the task's rows + nv");
+  require(law.rows <= m_all + std::max(m.nv, 0), "LawConfig.rows: at most the task's rows + nv");
   auto run = std::make_unique<TrackingRun>(m, task, law, stop, times, record.buffers(),
-                                           std::move(joints), crun.get());
+                                           std::move(joints), crun.get(), goals);
   new (self) PyTrackingRun{std::move(model), ModelShape::of(m), 0,    false, t,
                            record,           std::move(crun),   std::move(run)};
 }
 
 nb::tuple advance(PyTrackingRun& self, long c0, long c1, std::optional<In<double>> P_d,
                   std::optional<In<double>> R_d, In<double> FF, In<bool> at_rest,
-                  Array<double> q) {
+                  Array<double> q, std::optional<In<double>> goal_ref,
+                  std::optional<In<double>> goal_ff) {
   require_same_model(self.built, borrow_model(self.model.ptr()), "TrackingRun.advance");
   require(!self.stopped, "advance: the run has stopped; build a new TrackingRun");
   require(c0 == self.next && c1 >= c0 && c1 <= self.record.N,
           "advance: c0 the next sample (" + std::to_string(self.next) + ") and c0 <= c1 <= N (" +
               std::to_string(self.record.N) + ")");
   const auto n = static_cast<std::size_t>(c1 - c0);
-  const auto m = static_cast<std::size_t>(self.run->extended().m);
+  const auto m = static_cast<std::size_t>(self.run->primary_rows());
+  const Goals& goals = self.run->goals();
   const TaskConfig& task = self.run->task();
   auto shaped = [n](const auto& a, std::initializer_list<std::size_t> tail) {
     if (a.ndim() != 1 + tail.size() || a.shape(0) != n) return false;
@@ -191,19 +207,98 @@ nb::tuple advance(PyTrackingRun& self, long c0, long c1, std::optional<In<double
         "advance: FF (c1 - c0, m), at_rest (c1 - c0,), P_d (c1 - c0, 3) (None only without "
         "position rows), R_d (c1 - c0, 3, 3) (None only without orientation rows), q (nq,)");
   }
+  const auto D = static_cast<std::size_t>(goals.ref_size());
+  const auto M = static_cast<std::size_t>(goals.rows());
+  const bool goals_ok = goals.count() == 0
+                            ? !goal_ref && !goal_ff
+                            : goal_ref && goal_ff && shaped(*goal_ref, {D}) && shaped(*goal_ff, {M});
+  if (!goals_ok) {
+    throw std::invalid_argument(
+        "advance: goal_ref (c1 - c0, " + std::to_string(D) + ") and goal_ff (c1 - c0, " +
+        std::to_string(M) + "), C-contiguous float64, with goals only");
+  }
   Advance a;
   {
     nb::gil_scoped_release release;
     Eigen::Map<Vec> qv(q.data(), static_cast<Eigen::Index>(q.shape(0)));
     a = self.run->advance(c0, c1, P_d ? P_d->data() : nullptr, R_d ? R_d->data() : nullptr,
-                          FF.data(), at_rest.data(), qv);
+                          FF.data(), at_rest.data(), qv, goal_ref ? goal_ref->data() : nullptr,
+                          goal_ff ? goal_ff->data() : nullptr);
   }
   self.next = a.next;
   self.stopped = a.stop != Stop::none;
   return nb::make_tuple(a.next, stop_name(a.stop), a.k, a.r, a.err);
 }
 
+// The extra goals (tasks/goals.hpp) and the objectives (loop/objectives.hpp).
+void bind_goals(nb::module_& m) {
+  nb::class_<FrameGoal>(m, "FrameGoal",
+                        "A frame's pose goal: rows among 0..5, relative_to -1 (the world) or "
+                        "a frame.")
+      .def(
+          "__init__",
+          [](FrameGoal* self, int frame, std::vector<int> rows, int relative_to) {
+            new (self) FrameGoal{frame, std::move(rows), relative_to};
+          },
+          nb::arg("frame"), nb::arg("rows"), nb::arg("relative_to") = -1)
+      .def_ro("frame", &FrameGoal::frame)
+      .def_ro("rows", &FrameGoal::rows)
+      .def_ro("relative_to", &FrameGoal::relative_to);
+  nb::class_<PostureGoal>(m, "PostureGoal",
+                          "Joint angles of 1-DoF joints: idx_q, idx_v, continuous per joint.")
+      .def(
+          "__init__",
+          [](PostureGoal* self, std::vector<int> idx_q, std::vector<int> idx_v,
+             std::vector<bool> continuous) {
+            new (self) PostureGoal{std::move(idx_q), std::move(idx_v), std::move(continuous)};
+          },
+          nb::arg("idx_q"), nb::arg("idx_v"), nb::arg("continuous"))
+      .def_ro("idx_q", &PostureGoal::idx_q)
+      .def_ro("idx_v", &PostureGoal::idx_v);
+  nb::class_<ComGoal>(m, "ComGoal", "The centre of mass, rows among 0..2.")
+      .def(
+          "__init__",
+          [](ComGoal* self, std::vector<int> rows) { new (self) ComGoal{std::move(rows)}; },
+          nb::arg("rows"))
+      .def_ro("rows", &ComGoal::rows);
+  nb::class_<ObjectiveConfig>(m, "ObjectiveConfig",
+                              "A null-space objective of eq. (5): kind, gain [1/s], level.")
+      .def(
+          "__init__",
+          [](ObjectiveConfig* self, const std::string& kind, double gain, int level,
+             std::vector<int> idx_q, std::vector<int> idx_v, const std::optional<Vec>& center,
+             const std::optional<Vec>& half_range, const std::optional<Vec>& q_ref) {
+            const ObjectiveKind k = objective_kind(kind);
+            require(std::isfinite(gain) && gain >= 0.0, "ObjectiveConfig: gain, finite >= 0 [1/s]");
+            require(level >= 1, "ObjectiveConfig: level >= 1");
+            if (k == ObjectiveKind::joint_centering) {
+              require(center && half_range && center->size() == half_range->size() &&
+                          static_cast<size_t>(center->size()) == idx_q.size() &&
+                          idx_v.size() == idx_q.size(),
+                      "ObjectiveConfig: joint_centering needs idx_q, idx_v, center and "
+                      "half_range of one size");
+            }
+            require(k != ObjectiveKind::posture || q_ref,
+                    "ObjectiveConfig: posture needs q_ref (nq,)");
+            new (self) ObjectiveConfig{k,
+                                       gain,
+                                       level,
+                                       std::move(idx_q),
+                                       std::move(idx_v),
+                                       center.value_or(Vec()),
+                                       half_range.value_or(Vec()),
+                                       q_ref.value_or(Vec())};
+          },
+          nb::arg("kind"), nb::arg("gain"), nb::arg("level"),
+          nb::arg("idx_q") = std::vector<int>{}, nb::arg("idx_v") = std::vector<int>{},
+          nb::arg("center") = nb::none(), nb::arg("half_range") = nb::none(),
+          nb::arg("q_ref") = nb::none())
+      .def_ro("gain", &ObjectiveConfig::gain)
+      .def_ro("level", &ObjectiveConfig::level);
+}
+
 void bind_configs(nb::module_& m) {
+  bind_goals(m);
   nb::class_<TaskConfig>(m, "TaskConfig", "The task: its frame and rows (clik.Task).")
       .def(nb::init<int, std::vector<int>, bool, bool>(), nb::kw_only(), nb::arg("frame"),
            nb::arg("rows"), nb::arg("has_position"), nb::arg("has_orientation"))
@@ -216,22 +311,44 @@ void bind_configs(nb::module_& m) {
           "__init__",
           [](LawConfig* self, const std::string& law, double damping, double dt, double beta_max,
              const Vec& K_task, int rows, double alpha, const std::optional<Vec>& vmax,
-             const std::optional<Vec>& amax) {
+             const std::optional<Vec>& amax, const std::optional<std::vector<int>>& levels,
+             const std::vector<ObjectiveConfig>& objectives) {
             require(finite_positive(dt), "LawConfig: dt a finite time > 0 [s]");
             require(finite_nonnegative(damping), "LawConfig: damping finite >= 0");
             require(finite_positive(beta_max), "LawConfig: beta_max finite > 0 [1/s]");
             require(finite_positive(alpha), "LawConfig: alpha finite > 0 [1/s]");
-            require(rows >= 1 && K_task.size() >= 1 && K_task.size() <= MAX_TASK_ROWS,
-                    "LawConfig: rows >= 1 and K_task, 1 to 6 task gains");
+            require(rows >= 1 && K_task.size() >= 1,
+                    "LawConfig: rows >= 1 and K_task, a gain per task row (at least one)");
+            const LawKind kind = law_kind(law);
+            if (levels) {
+              bool ok = !levels->empty() && levels->front() >= 1 &&
+                        levels->back() == static_cast<int>(K_task.size());
+              for (size_t l = 1; ok && l < levels->size(); ++l) {
+                ok = (*levels)[l] > (*levels)[l - 1];
+              }
+              require(ok, "LawConfig: levels, the end row of each level, strictly increasing, "
+                          "the last == len(K_task)");
+            }
+            require(kind == LawKind::pseudoinverse ||
+                        ((!levels || levels->size() == 1) && objectives.empty()),
+                    "LawConfig: levels and objectives need law 'pseudoinverse'");
+            // objectives' levels and data are checked against the model where the run is built.
             // vmax and amax are checked against the model where the run is built.
             SpeedBounds speed{vmax.value_or(Vec()), amax.value_or(Vec())};
             const bool budget_blocks = speed.velocity.size() == 0;
-            new (self) LawConfig{LawSettings{law_kind(law), damping, dt, beta_max, budget_blocks},
-                                 K_task, rows, alpha, std::move(speed)};
+            new (self) LawConfig{LawSettings{kind, damping, dt, beta_max, budget_blocks},
+                                 K_task,
+                                 rows,
+                                 alpha,
+                                 std::move(speed),
+                                 levels.value_or(std::vector<int>{}),
+                                 objectives};
           },
           nb::kw_only(), nb::arg("law"), nb::arg("damping"), nb::arg("dt"), nb::arg("beta_max"),
           nb::arg("K_task"), nb::arg("rows"), nb::arg("alpha"), nb::arg("vmax") = nb::none(),
-          nb::arg("amax") = nb::none())
+          nb::arg("amax") = nb::none(), nb::arg("levels") = nb::none(),
+          nb::arg("objectives") = std::vector<ObjectiveConfig>{})
+      .def_ro("levels", &LawConfig::levels)
       .def_prop_ro("dt", [](const LawConfig& c) { return c.settings.dt; })
       .def_ro("K_task", &LawConfig::K_task)
       .def_ro("rows", &LawConfig::rows)
@@ -298,10 +415,11 @@ void bind_record(nb::module_& m) {
              std::optional<Array<double>> reference, Array<double> error,
              std::optional<Array<double>> orientation_error,
              std::optional<Array<std::int16_t>> active, std::optional<Array<double>> distance,
-             Array<double> joint_min, Array<double> joint_max, Array<double> qdot_prev) {
+             Array<double> joint_min, Array<double> joint_max, Array<double> qdot_prev,
+             std::optional<Array<double>> goal_error) {
             RecordArrays r{N,         every,  idx,      q,         qdot,      qddot,
                            position,  reference, error, orientation_error, active, distance,
-                           joint_min, joint_max, qdot_prev};
+                           joint_min, joint_max, qdot_prev, goal_error};
             r.validate();
             new (self) RecordArrays(std::move(r));
           },
@@ -311,7 +429,7 @@ void bind_record(nb::module_& m) {
           nb::arg("error").noconvert(), nb::arg("orientation_error").noconvert().none(),
           nb::arg("active").noconvert().none(), nb::arg("distance").noconvert().none(),
           nb::arg("joint_min").noconvert(), nb::arg("joint_max").noconvert(),
-          nb::arg("qdot_prev").noconvert(),
+          nb::arg("qdot_prev").noconvert(), nb::arg("goal_error").noconvert().none() = nb::none(),
           "Each array as the Recorder allocated it (its dtype, contiguous: never converted), "
           "reference, orientation_error, active and distance None where it has none.")
       .def_ro("N", &RecordArrays::N)
@@ -331,12 +449,18 @@ void bind_tracking(nb::module_& m) {
       .def("__init__", &make_run, nb::kw_only(), nb::arg("model"), nb::arg("task"),
            nb::arg("law"), nb::arg("stop"), nb::arg("t").noconvert(), nb::arg("record"),
            nb::arg("joints"), nb::arg("constraints").none(),
+           nb::arg("goals") = std::vector<GoalConfig>{},
            "model: the robot's pin.Model (borrowed); t: the time grid (N,) float64, read in "
            "place; record: the Recorder's arrays; constraints: a ConstraintSetConfig or None.")
       .def("advance", &advance, nb::arg("c0"), nb::arg("c1"), nb::arg("P_d").noconvert().none(),
            nb::arg("R_d").noconvert().none(), nb::arg("FF").noconvert(),
            nb::arg("at_rest").noconvert(), nb::arg("q").noconvert(),
-           "Run samples [c0, c1): (next, stop, k, r, err); q is updated in place.")
+           nb::arg("goal_ref").noconvert().none() = nb::none(),
+           nb::arg("goal_ff").noconvert().none() = nb::none(),
+           "Run samples [c0, c1): (next, stop, k, r, err); q is updated in place. With goals: "
+           "goal_ref (c1 - c0, D) and goal_ff (c1 - c0, M).")
+      .def_prop_ro("goal_max", [](const PyTrackingRun& s) { return Mat(s.run->goal_max()); })
+      .def_prop_ro("goal_last", [](const PyTrackingRun& s) { return Mat(s.run->goal_last()); })
       .def_prop_ro("max_error", [](const PyTrackingRun& s) { return s.run->max_error(); })
       .def_prop_ro("last_error", [](const PyTrackingRun& s) { return s.run->last_error(); })
       .def_prop_ro("steps", [](const PyTrackingRun& s) { return s.run->steps(); })

@@ -3,6 +3,7 @@
 // construction: velocity() allocates nothing.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <vector>
@@ -14,6 +15,11 @@ namespace clik {
 
 // Damping starts when a singular value falls below this fraction of sigma_max(J).
 constexpr double CONDITION_RATIO = 0.01;
+// A level of law (10) of at most this many rows has a fixed-capacity eigensolver, which
+// allocates nothing (Eigen's dynamic one allocates in each tridiagonalisation).
+constexpr int MAX_EIGEN_ROWS = 48;
+using EigenMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor,
+                               MAX_EIGEN_ROWS, MAX_EIGEN_ROWS>;
 // Largest joint step [rad or m] each level of law (10) may ask for in one sample.
 constexpr double STEP_BUDGET = 0.02;
 // A constraint direction counts above this singular value, relative to max(scale, 1).
@@ -29,6 +35,14 @@ struct LawSettings {
   bool budget_blocks = true;
 };
 
+// Law (10)'s priority levels and objectives (issue 24; clik/loop/levels.py): the end row
+// of each level of the task rows (strictly increasing, the last = every task row), and
+// the level of each objective of eq. (5). Empty ends: one level of every task row.
+struct LevelPlan {
+  std::vector<int> ends;
+  std::vector<int> objective_levels;
+};
+
 class Law {
  public:
   // rows: the most rows an extended task will hold; nv: joint velocity size. Law (10)
@@ -36,6 +50,8 @@ class Law {
   // constraint rows (1..rows, and rows <= m + nv): the count changes from sample to
   // sample, and an SVD resized to it would reallocate.
   Law(const LawSettings& settings, int rows, int nv);
+  // With levels and objectives (law (10) only): m, the task rows (plan.ends' last).
+  Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& plan);
 
   // Joint velocity [rad/s] of the law on the first r rows of ext into qdot.
   // Returns law (10)'s unrealised fraction of the task demand
@@ -48,7 +64,20 @@ class Law {
   // rows): the speed step's part to keep first.
   const Vec& constraint_part() const { return qdot_c_; }
 
+  // Whether law (10) runs by levels (clik/loop/levels.py's prioritized_levels): several
+  // levels, one of more than MAX_TASK_ROWS rows, or objectives.
+  bool by_levels() const { return by_levels_; }
+  int levels() const { return static_cast<int>(ends_.size()); }
+  // The last velocity()'s parts by levels (1 + L, nv): the constraint level's, then each
+  // level's (its objectives included): the speed step's parts (by_levels() only).
+  const Mat& parts() const { return parts_; }
+  // Each objective's z [rad/s] (nv) of this sample, written by the run before velocity().
+  std::vector<Vec>& objective_z() { return z_; }
+
  private:
+  double prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot);
+  void level_constraints(const ExtendedTask& ext, int v, double scale1);
+  double unrealised_rows(const ExtendedTask& ext, int a, int b, const Vec& x);
   double prioritized(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot);
   void constraint_level(const ExtendedTask& ext, int v, double epsilon);
   void one_constraint_level(const ExtendedTask& ext, double epsilon);
@@ -70,6 +99,26 @@ class Law {
     Eigen::JacobiSVD<Eigen::MatrixXd> svd;
   };
   std::vector<ConstraintBlock> constraint_;
+
+  // By levels: one workspace per level, sized once (its rows never change).
+  struct Level {
+    Level(int n, int nv);
+    Eigen::MatrixXd JN, T, A, S;  // J_l N (n, nv); J_l B^T (n, nv); JN JN^T, its shift (n, n)
+    Eigen::MatrixXd H, Hs;        // JN^T JN + c B^T B, its shift (nv, nv): the joint-space solve
+    Vec rest, y, tmp;
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;   // levels of more rows
+    Eigen::SelfAdjointEigenSolver<EigenMat> eig_small;  // levels of at most MAX_EIGEN_ROWS
+    Eigen::LLT<Eigen::MatrixXd> llt, lltv;
+    bool basis = false;  // extends B (a level above another, or with objectives)
+  };
+  bool by_levels_ = false;
+  std::vector<int> ends_, zlevel_;
+  std::vector<Vec> z_;
+  std::vector<Level> level_;
+  Eigen::MatrixXd B_;  // orthonormal rows removed so far (nb_ of them)
+  int nb_ = 0;
+  Mat parts_;
+  Vec out_, bz_, zp_;
 };
 
 }  // namespace clik

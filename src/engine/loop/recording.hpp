@@ -31,6 +31,8 @@ struct RecordBuffers {
   double* joint_min = nullptr;       // (nq)
   double* joint_max = nullptr;       // (nq)
   double* qdot_prev = nullptr;       // (nv)
+  double* goal_error = nullptr;      // (capacity, G, 2) or null: each goal's error norms
+  int goals = 0;                     // G
 };
 
 class Recorder {
@@ -62,6 +64,16 @@ class Recorder {
     }
     j_ = j + 1;
     return j;
+  }
+
+  // Each goal's (first, second) error norms (G, 2) into slot j.
+  void goals(long j, const Mat& norms) {
+    if (b_.goal_error == nullptr) return;
+    double* out = b_.goal_error + 2 * b_.goals * j;
+    for (int g = 0; g < b_.goals; ++g) {
+      out[2 * g] = norms(g, 0);
+      out[2 * g + 1] = norms(g, 1);
+    }
   }
 
   void constraints(long j, int active, double min_distance) {

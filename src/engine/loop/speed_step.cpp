@@ -93,4 +93,25 @@ void SpeedStep::apply(const ExtendedTask& ext, int r, const Vec* qdot_c, Eigen::
   prev_ = qdot;
 }
 
+void SpeedStep::apply_levels(const Mat& parts, Eigen::Ref<Vec> qdot) {
+  if (!qdot.allFinite()) return;
+  if (within(qdot)) {
+    prev_ = qdot;
+    return;
+  }
+  c_ = parts.row(0).transpose();
+  u_ = box_scale(c_) * c_;  // (S1)
+  for (Eigen::Index l = 1; l < parts.rows(); ++l) {  // (S2), level by level
+    t_ = parts.row(l).transpose();
+    u_ += fit(u_, t_) * t_;
+  }
+  qdot = u_;
+  if (accel_) {  // (S3)
+    t_ = qdot - prev_;
+    qdot = prev_ + accel_scale(t_) * t_;
+  }
+  qdot = qdot.cwiseMax(-v_).cwiseMin(v_);
+  prev_ = qdot;
+}
+
 }  // namespace clik

@@ -26,6 +26,11 @@ class SpeedStep {
   // law (10), or null (laws (9), (8): J_c^T K_c e_c from ext's rows m..r).
   void apply(const ExtendedTask& ext, int r, const Vec* qdot_c, Eigen::Ref<Vec> qdot);
 
+  // The same with law (10)'s parts by levels (1 + L, nv) (Law::parts()): (S1) on the
+  // constraint part, then (S2) on each level's part in turn with the room left,
+  // u += fit(u, t_l) t_l for l = 1 .. L.
+  void apply_levels(const Mat& parts, Eigen::Ref<Vec> qdot);
+
  private:
   bool within(const Eigen::Ref<const Vec>& qdot) const;
   double box_scale(const Vec& c) const;              // (S1)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <pinocchio/algorithm/center-of-mass.hpp>
 #include <pinocchio/algorithm/frames.hpp>
 #include <pinocchio/algorithm/jacobian.hpp>
 #include <pinocchio/algorithm/joint-configuration.hpp>
@@ -22,12 +23,11 @@ const TaskConfig& TrackingRun::checked(const pinocchio::Model& model, const Task
                                        const LawConfig& law, const JointMonitorConfig& joints) {
   const auto m = static_cast<int>(task.rows.size());
   bool ok = task.frame >= 0 && task.frame < static_cast<int>(model.nframes) && m >= 1 &&
-            m <= MAX_TASK_ROWS && law.K_task.size() == m && law.rows >= m;
+            m <= MAX_TASK_ROWS;
   for (int row : task.rows) ok = ok && row >= 0 && row < 6;
   if (!ok) {
     throw std::invalid_argument(
-        "TrackingRun: the task's frame in the model, 1 to 6 rows among 0..5, one gain per row "
-        "and room for them (LawConfig.rows >= m)");
+        "TrackingRun: the task's frame in the model, 1 to 6 rows among 0..5");
   }
   const auto nv = static_cast<Eigen::Index>(model.nv);
   const Vec& v = law.speed.velocity;
@@ -51,31 +51,82 @@ const TaskConfig& TrackingRun::checked(const pinocchio::Model& model, const Task
   return task;
 }
 
+// The levels' end rows (LawConfig.levels) checked against the rows of the primary task
+// (always in the first level) and of the goals (a level holds whole goals).
+LevelPlan TrackingRun::level_plan(const TaskConfig& task, const LawConfig& law,
+                                  const Goals& goals) {
+  const int m0 = static_cast<int>(task.rows.size());
+  const int m = m0 + goals.rows();
+  if (law.K_task.size() != m || law.rows < m) {
+    throw std::invalid_argument(
+        "LawConfig: K_task, one gain per task row (the primary's " + std::to_string(m0) +
+        " and the goals' " + std::to_string(goals.rows()) + "), and rows >= them");
+  }
+  LevelPlan plan;
+  plan.ends = law.levels.empty() ? std::vector<int>{m} : law.levels;
+  bool ok = plan.ends.front() >= m0 && plan.ends.back() == m;
+  for (size_t l = 0; ok && l < plan.ends.size(); ++l) {
+    const int end = plan.ends[l];
+    ok = l == 0 || end > plan.ends[l - 1];
+    bool boundary = end == m0;
+    for (int g = 0; !boundary && g < goals.count(); ++g) boundary = end == m0 + goals.row_end(g);
+    ok = ok && boundary;
+  }
+  if (!ok) {
+    throw std::invalid_argument(
+        "LawConfig: levels, the end row of each level, strictly increasing, each at the end "
+        "of the primary task or of a goal, the first >= the primary's rows, the last == every "
+        "task row (" + std::to_string(m) + ")");
+  }
+  if (law.settings.kind != LawKind::pseudoinverse &&
+      (plan.ends.size() > 1 || !law.objectives.empty())) {
+    throw std::invalid_argument(
+        "LawConfig: levels and objectives need law 'pseudoinverse' (laws (9) and (8): one "
+        "level, no objective)");
+  }
+  for (const ObjectiveConfig& o : law.objectives) plan.objective_levels.push_back(o.level);
+  return plan;
+}
+
 TrackingRun::TrackingRun(const pinocchio::Model& model, const TaskConfig& task,
                          const LawConfig& law, const StopConfig& stop, const TimesView& t,
                          const RecordBuffers& record, JointMonitorConfig joints,
-                         ConstraintRun* constraints)
+                         ConstraintRun* constraints, const std::vector<GoalConfig>& goals)
     : model_(model), data_(model), task_(checked(model, task, law, joints)),
-      m_(static_cast<int>(task.rows.size())), dt_(law.settings.dt), t_(t),
-      ext_(m_, law.rows, model.nv, law.K_task), law_(law.settings, law.rows, model.nv),
-      speed_(law.speed, law.settings.dt, model.nv), checks_(stop, law.settings.kind, law.settings.dt, law.rows), rec_(record),
+      goals_(model, goals), m0_(static_cast<int>(task.rows.size())), m_(m0_ + goals_.rows()),
+      plan_(level_plan(task, law, goals_)), dt_(law.settings.dt), t_(t),
+      ext_(m_, law.rows, model.nv, law.K_task),
+      law_(law.settings, law.rows, model.nv, m_, plan_),
+      objectives_(model, law.objectives, static_cast<int>(plan_.ends.size()), task.frame,
+                  task.rows),
+      speed_(law.speed, law.settings.dt, model.nv),
+      checks_(stop, law.settings.kind, law.settings.dt, law.rows), rec_(record),
       monitor_(std::move(joints)),
       crun_(constraints), J6_(6, model.nv), e6_(Eigen::Matrix<double, 6, 1>::Zero()),
-      qdot_(Vec::Zero(model.nv)), dq_(Vec::Zero(model.nv)), qnext_(Vec::Zero(model.nq)) {
+      qdot_(Vec::Zero(model.nv)), dq_(Vec::Zero(model.nv)), qnext_(Vec::Zero(model.nq)),
+      goal_norms_(Mat::Zero(goals_.count(), 2)), goal_max_(Mat::Zero(goals_.count(), 2)) {
   J6_.setZero();
   for (int row : task.rows) (row < 3 ? pos_rows_ : rot_rows_).push_back(row);
+  for (int g = 0; g < goals_.count(); ++g) {
+    if (m0_ + goals_.row_end(g) <= plan_.ends.front()) first_goals_ = g + 1;
+  }
+  full_kinematics_ = crun_ != nullptr || goals_.count() > 0 || !objectives_.empty();
 }
 
 // 1. The frame's placement and Jacobian (6, nv) at q, eq. (3), LOCAL_WORLD_ALIGNED.
 // With constraints every joint's Jacobian is computed: their rows need them.
 void TrackingRun::kinematics(const Vec& q) {
-  if (crun_ == nullptr) {
+  if (!full_kinematics_) {
     pinocchio::computeFrameJacobian(model_, data_, q, task_.frame, LWA, J6_);
     pinocchio::updateFramePlacement(model_, data_, task_.frame);
     return;
   }
   pinocchio::computeJointJacobians(model_, data_, q);
+  if (goals_.needs_com()) pinocchio::jacobianCenterOfMass(model_, data_, q);
   pinocchio::updateFramePlacement(model_, data_, task_.frame);
+  for (int f : goals_.frames()) {
+    pinocchio::updateFramePlacement(model_, data_, static_cast<pinocchio::FrameIndex>(f));
+  }
   J6_.setZero();
   pinocchio::getFrameJacobian(model_, data_, task_.frame, LWA, J6_);
 }
@@ -91,7 +142,7 @@ void TrackingRun::task_rows(const double* p_d, const double* R_d, const double* 
     const Mat3 R = Rd * placement.rotation().transpose();
     e6_.tail<3>() = pinocchio::log3(R);
   }
-  for (int i = 0; i < m_; ++i) {
+  for (int i = 0; i < m0_; ++i) {
     const int row = task_.rows[i];
     ext_.e[i] = e6_[row];
     ext_.J.row(i) = J6_.row(row);
@@ -130,7 +181,8 @@ void TrackingRun::observe_limits(double tk, const Vec& q) {
 }
 
 Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* R_d,
-                             const double* FF, const bool* at_rest, Eigen::Ref<Vec> q) {
+                             const double* FF, const bool* at_rest, Eigen::Ref<Vec> q,
+                             const double* goal_ref, const double* goal_ff) {
   const long N = t_.size();
   Vec qv = q;  // the state as a Vec (one copy per chunk)
   if (!started_) {
@@ -142,26 +194,48 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
     const long kk = k - c0;
     const double* p_d = P_d == nullptr ? nullptr : P_d + 3 * kk;
     kinematics(qv);
-    task_rows(p_d, R_d == nullptr ? nullptr : R_d + 9 * kk, FF + m_ * kk);
+    task_rows(p_d, R_d == nullptr ? nullptr : R_d + 9 * kk, FF + m0_ * kk);
+    if (goals_.count() > 0) {
+      goals_.write(GoalContext{model_, data_, qv}, goal_ref + goals_.ref_size() * kk,
+                   goal_ff + goals_.rows() * kk, ext_, m0_);
+    }
+    if (!objectives_.empty()) {
+      objectives_.compute(model_, data_, qv, ext_.J.topRows(m0_), law_.objective_z());
+    }
     const bool exact = rec_.due(k);
     const int r = crun_ == nullptr
                       ? m_
                       : m_ + update_constraints(*crun_, k, qv, model_, data_, ext_, law_, exact);
     const double blocked = law_.velocity(ext_, r, qdot_);
     if (speed_.enabled()) {
-      const bool level = law_.settings().kind == LawKind::pseudoinverse;
-      speed_.apply(ext_, r, level ? &law_.constraint_part() : nullptr, qdot_);
+      if (law_.by_levels()) {
+        speed_.apply_levels(law_.parts(), qdot_);
+      } else {
+        const bool level = law_.settings().kind == LawKind::pseudoinverse;
+        speed_.apply(ext_, r, level ? &law_.constraint_part() : nullptr, qdot_);
+      }
     }
     double err = 0.0, err_rot = 0.0;
     error_norms(err, err_rot);
     err_ = err;
     max_err_ = std::max(max_err_, err);
-    const Stop why = stop(k, err, r, blocked, at_rest[kk]);
+    double err_stop = err;
+    if (goals_.count() > 0) {
+      goals_.norms(ext_, m0_, goal_norms_);
+      for (int g = 0; g < goals_.count(); ++g) {
+        for (int c = 0; c < 2; ++c) {  // a NaN carries through
+          if (!(goal_norms_(g, c) <= goal_max_(g, c))) goal_max_(g, c) = goal_norms_(g, c);
+        }
+        if (g < first_goals_ && !(goal_norms_(g, 0) <= err_stop)) err_stop = goal_norms_(g, 0);
+      }
+    }
+    const Stop why = stop(k, err_stop, r, blocked, at_rest[kk]);
     observe_limits(t_[k], qv);
     if (exact || why != Stop::none) {
       const long j = rec_.keep(k, qv, qdot_, data_.oMf[task_.frame].translation(), p_d, err,
                                err_rot);
       if (crun_ != nullptr) record_constraints(*crun_, rec_, j, r - m_);
+      if (goals_.count() > 0) rec_.goals(j, goal_norms_);
     }
     rec_.every_sample(qv, qdot_);
     steps_ = k + 1;
@@ -170,7 +244,7 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
       out.stop = why;
       out.k = k;
       out.r = r;
-      out.err = err;
+      out.err = err_stop;
       q = qv;
       return out;
     }

@@ -17,11 +17,13 @@
 #include <pinocchio/multibody/model.hpp>
 
 #include "loop/laws.hpp"
+#include "loop/objectives.hpp"
 #include "loop/recording.hpp"
 #include "loop/speed_step.hpp"
 #include "loop/stop_checks.hpp"
 #include "constraints/violations.hpp"
 #include "tasks/extended_task.hpp"
+#include "tasks/goals.hpp"
 #include "types.hpp"
 
 namespace clik {
@@ -40,10 +42,12 @@ struct TaskConfig {
 // The law and the task's gains (`_engine.LawConfig`).
 struct LawConfig {
   LawSettings settings;
-  Vec K_task;       // the task rows' gains [1/s] (m)
+  Vec K_task;       // every task row's gain [1/s] (m: the primary's rows, then the goals')
   int rows = 0;     // room of the extended task: the task's rows and the most constraint rows
   double alpha = 0; // the task's largest gain [1/s] (the constraint rows' default gains)
   SpeedBounds speed; // the joint speed limits the law keeps (empty: none)
+  std::vector<int> levels;                 // end row of each level (empty: one, [m])
+  std::vector<ObjectiveConfig> objectives; // eq. (5), law (10) only
 };
 
 using StopConfig = StopSettings;  // `_engine.StopConfig`
@@ -54,21 +58,35 @@ struct Advance {
   Stop stop = Stop::none;
   long k = -1;          // the sample it stopped at
   int r = 0;            // rows of the extended task then
-  double err = 0.0;     // task error then
+  double err = 0.0;     // task error then (the stop checks': with goals, the largest of the
+                        // primary's and the first level's goals')
 };
 
 class TrackingRun {
  public:
   // Throws std::invalid_argument when the task, the gains, the rows or the joints do not
   // fit the model.
+  // goals: the extra goals after the primary task (issue 24), in row order (level by level).
+  // constraints: built with offset m (every task row) and the primary's rows (task_m).
   TrackingRun(const pinocchio::Model& model, const TaskConfig& task, const LawConfig& law,
               const StopConfig& stop, const TimesView& t, const RecordBuffers& record,
-              JointMonitorConfig joints, ConstraintRun* constraints);
+              JointMonitorConfig joints, ConstraintRun* constraints,
+              const std::vector<GoalConfig>& goals = {});
 
   // Runs samples [c0, c1) with the chunk's reference: P_d (n, 3) or null, R_d
-  // (n, 3, 3) row-major or null, FF (n, m), at_rest (n). q is the state, updated.
+  // (n, 3, 3) row-major or null, FF (n, m0), at_rest (n); with goals goal_ref (n, D) and
+  // goal_ff (n, M) (D, M: the goals' reference doubles and rows). q is the state, updated.
   Advance advance(long c0, long c1, const double* P_d, const double* R_d, const double* FF,
-                  const bool* at_rest, Eigen::Ref<Vec> q);
+                  const bool* at_rest, Eigen::Ref<Vec> q, const double* goal_ref = nullptr,
+                  const double* goal_ff = nullptr);
+
+  // The task rows: the primary's (m0) and every row (m); the goals.
+  int primary_rows() const { return m0_; }
+  int task_rows() const { return m_; }
+  const Goals& goals() const { return goals_; }
+  // Each goal's (first, second) error norm: the largest over every sample, the last's (G, 2).
+  const Mat& goal_max() const { return goal_max_; }
+  const Mat& goal_last() const { return goal_norms_; }
 
   double max_error() const { return max_err_; }
   double last_error() const { return err_; }
@@ -88,15 +106,19 @@ class TrackingRun {
   void observe_limits(double tk, const Vec& q);
   static const TaskConfig& checked(const pinocchio::Model& model, const TaskConfig& task,
                                    const LawConfig& law, const JointMonitorConfig& joints);
+  static LevelPlan level_plan(const TaskConfig& task, const LawConfig& law, const Goals& goals);
 
   const pinocchio::Model& model_;
   pinocchio::Data data_;
   TaskConfig task_;
-  int m_;
+  Goals goals_;
+  int m0_, m_;
+  LevelPlan plan_;
   double dt_;
   TimesView t_;
   ExtendedTask ext_;
   Law law_;
+  Objectives objectives_;
   SpeedStep speed_;
   StopChecks checks_;
   Recorder rec_;
@@ -106,6 +128,9 @@ class TrackingRun {
   Eigen::Matrix<double, 6, 1> e6_;
   Vec qdot_, dq_, qnext_;
   std::vector<int> pos_rows_, rot_rows_;
+  int first_goals_ = 0;  // goals in the first level (their errors count in the stop checks)
+  bool full_kinematics_ = false;
+  Mat goal_norms_, goal_max_;  // (G, 2)
   double max_err_ = 0.0, err_ = 0.0;
   long steps_ = 0;
   bool started_ = false;

@@ -1,6 +1,7 @@
 // The extended task of one run, eqs. (24)-(25), as preallocated arrays
 // (mirrors clik/tasks/extended_task.py). Rows 0..m are the task (J, e = x_d - x,
-// gains K, feed-forward xdot_d); rows m..m+v the active constraints' rows,
+// gains K, feed-forward xdot_d): the primary task's rows first, then the extra goals'
+// (issue 24), level by level; rows m..m+v the active constraints' rows,
 // written each sample by the run's ConstraintRun. The run owns it.
 #pragma once
 
@@ -11,7 +12,7 @@
 namespace clik {
 
 struct ExtendedTask {
-  int m;     // task rows
+  int m;     // task rows: the primary task's and the extra goals'
   int rows;  // room: task plus the most constraint rows
   int nv;
   Mat J;     // (rows, nv)
@@ -22,7 +23,9 @@ struct ExtendedTask {
   ExtendedTask(int m_, int rows_, int nv_, const Vec& K_task)
       : m(m_), rows(rows_), nv(nv_), J(Mat::Zero(rows_, nv_)), e(Vec::Zero(rows_)),
         K(Vec::Zero(rows_)), ff(Vec::Zero(rows_)) {
-    if (m_ < 1 || m_ > MAX_TASK_ROWS) throw std::invalid_argument("task: expected 1 to 6 rows");
+    if (m_ < 1 || rows_ < m_ || K_task.size() != m_) {
+      throw std::invalid_argument("task: at least 1 row, one gain per task row, room for them");
+    }
     K.head(m) = K_task;
   }
 
