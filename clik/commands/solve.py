@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tqdm import tqdm
 
@@ -19,6 +20,9 @@ from clik.outputs.export import FORMATS, check_exportable
 from clik.outputs.io import output_errors
 from clik.outputs.out_folder import output_folder
 from clik.outputs.result import FAILED_STATUSES, TrackingResult, write_outputs
+
+if TYPE_CHECKING:
+    from clik.tasks.goal import Goal
 
 
 class ProgressBar:
@@ -59,6 +63,7 @@ def print_summary(name: str, summary: dict) -> None:
         f"max tracking error {_number(summary['max_task_error'], '.3e')} {unit}, "
         f"final {_number(summary['final_task_error'], '.3e')} {unit}"
     )
+    print_task_errors(summary)
     if summary.get("min_obstacle_distance") is not None:
         print(f"  min link-obstacle distance {summary['min_obstacle_distance']:.4f} m")
     ratio = summary.get("max_velocity_ratio")
@@ -76,6 +81,32 @@ def print_summary(name: str, summary: dict) -> None:
                 f"{e['action']} {e['constraint']} @ {e['t']:.3f}s" for e in summary["events"]
             )
         )
+
+
+def print_task_errors(summary: dict) -> None:
+    """One line per task of a several-task run: name, kind, priority, max and final errors.
+
+    A run of one task (``task_errors`` is ``{"task": ...}``) says nothing more. Units:
+    ``info["task_units"]`` (the scenario's run), else [rad] for an orientation task and
+    [m] for the others; a pose task adds its orientation rows' errors [rad].
+    """
+    errors = summary.get("task_errors") or {}
+    if list(errors) in ([], ["task"]):
+        return
+    units = summary["info"].get("task_units", {})
+    width = max(len(name) for name in errors)
+    for name, e in errors.items():
+        unit = units.get(name, "rad" if e.get("kind") == "orientation" else "m")
+        line = (
+            f"  task {name:<{width}}  {e.get('kind', '?'):<11} priority {e.get('priority', '?')}"
+            f"  max {_number(e['max'], '.3e')} {unit}, final {_number(e['final'], '.3e')} {unit}"
+        )
+        if "max_orientation" in e:
+            line += (
+                f"; orientation max {_number(e['max_orientation'], '.3e')} rad, "
+                f"final {_number(e['final_orientation'], '.3e')} rad"
+            )
+        print(line)
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
@@ -97,7 +128,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         result = run.execute(ProgressBar(run.scenario.name, None if not args.quiet else False))
         with output_errors(out):
             summary = write_outputs(result, work)
-            written = write_extras(args, result, work, run.scenario.name)
+            written = write_extras(args, result, work, run.scenario.name, run.goals)
     extras = [out / p.relative_to(work) for p in written]
     if not args.quiet:
         print_summary(run.scenario.name, summary)
@@ -108,9 +139,13 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
 
 def write_extras(
-    args: argparse.Namespace, result: TrackingResult, out: Path, name: str
-) -> list[Path]:
-    """``--export``, ``--html`` and ``--plots`` of ``clik solve``; the exported files."""
+    args: argparse.Namespace, result: TrackingResult, out: Path, name: str,
+    goals: Sequence[Goal] = (),
+) -> list[Path]:  # fmt: skip
+    """``--export``, ``--html`` and ``--plots`` of ``clik solve``; the exported files.
+
+    ``goals``: a several-task scenario's tasks, whose references and trails the view draws.
+    """
     written: list[Path] = []
     if args.export:
         every = 1 if args.export_every is None else args.export_every
@@ -118,11 +153,12 @@ def write_extras(
     if args.html:
         from clik.viz import export_html
 
-        export_html(result, out / "scene.html")
+        several = list(goals) if len(goals) > 1 else None
+        written.append(export_html(result, out / "scene.html", tasks=several))
     if args.plots:
         from clik.plot import save_result_plots
 
-        save_result_plots([result], out, [name])
+        written += save_result_plots([result], out, [name])
     return written
 
 

@@ -127,7 +127,7 @@ class Tracker:
             raise InputError("constraints", "a ConstraintSet or None", type(constraints).__name__)
         if constraints is not None and constraints.robot is not task.robot:
             raise InputError("constraints", "a ConstraintSet built on the task's robot")
-        self.engine = engine
+        self._engine = engine
         self.task = task
         self.robot = task.robot
         self.law = check_law(law)
@@ -146,8 +146,7 @@ class Tracker:
             2.0 * self.alpha if beta_max is None else _positive(beta_max, "beta_max", "[1/s]")
         )
         self.constraints = constraints
-        if engine == "compiled" and (self.m != task.m or self.leveled):
-            _check_engine_goals()
+        self.engine = engine  # checked again: several tasks need an engine built with them
         m = self.m
         limit = constraints.row_limit(m, self.law) if constraints is not None else 0
         self.rows = m + limit
@@ -158,6 +157,19 @@ class Tracker:
             None if joint_speed is None else joint_speed.bounds(self.robot)
         )
         """The bounds the law keeps every joint within (None: no speed limit in the law)."""
+
+    @property
+    def engine(self) -> str:
+        """``"compiled"`` or ``"python"``: the engine the runs use (may be changed)."""
+        return self._engine
+
+    @engine.setter
+    def engine(self, engine: str) -> None:
+        if engine not in ENGINES:
+            raise InputError("engine", " or ".join(repr(e) for e in ENGINES), engine)
+        if engine == "compiled" and (self.m != self.task.m or self.leveled):
+            _check_engine_goals()
+        self._engine = engine
 
     def without_speed_limits(self) -> Tracker:
         """A copy of this tracker whose law keeps no joint speed limit (re-timing passes)."""
@@ -271,14 +283,10 @@ class Tracker:
             ReachWarning: A position of the reference lies beyond the frame's reach.
             StabilityWarning: The gains break explicit Euler's bound at ``q0``.
         """
-        robot = self.robot
-        robot.check_model()
+        (robot := self.robot).check_model()
         q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
         robot.check_within_limits(q, "q0")
-        trajectory = self._primary_trajectory(trajectory)
-        duration = self._check_run(trajectory, record_every, progress, settle)
-        if self.stack is not None:
-            duration = max(duration, self.stack.duration())
+        trajectory, duration = self._checked_trajectory(trajectory, record_every, progress, settle)
         self.check_size(duration + settle, int(record_every))
         settings = checked_settings(
             self.dt, deadlock_window=deadlock_window, deadlock_ratio=deadlock_ratio,
@@ -292,6 +300,16 @@ class Tracker:
         every = min(int(record_every), t.shape[0])  # beyond N: the first and last samples
         run = _Run(self, t, chunks, every, settings, progress, tol, q)
         return run.execute(q, out_of_reach)
+
+    def _checked_trajectory(
+        self, trajectory: Trajectory | None, record_every: int, progress: object, settle: float
+    ) -> tuple[Trajectory, float]:
+        """The primary task's trajectory, checked, and the run's duration [s] (the longest)."""
+        trajectory = self._primary_trajectory(trajectory)
+        duration = self._check_run(trajectory, record_every, progress, settle)
+        if self.stack is not None:
+            duration = max(duration, self.stack.duration())
+        return trajectory, duration
 
     def _primary_trajectory(self, trajectory: Trajectory | None) -> Trajectory:
         """The primary task's trajectory: the one given, or its goal's with ``tasks``."""

@@ -65,7 +65,10 @@ class TrackerSettings(Protocol):
 
     @property
     def leveled(self) -> bool: ...  # noqa: D102
-    engine: str
+
+    @property
+    def engine(self) -> str: ...  # noqa: D102
+
     dt: float
     K_task: np.ndarray
     alpha: float

@@ -11,6 +11,7 @@ Axes-level functions draw into a Matplotlib ``Axes`` that the caller owns
   metres (a continuous joint's cos and sin as they are).
 - :func:`planar_stick`: the arm drawn every ``every`` seconds, projected on a
   plane, with the obstacles and their thresholds.
+- :func:`task_error`: one task of a several-task run, its error norms against time.
 
 Each takes one result or several (overlaid, one colour each) and marks the
 constraint events (docs/method.md, "Activation and release") as vertical lines in
@@ -20,7 +21,8 @@ dotted for ``skipped``.
 File-level functions build figures with :class:`matplotlib.figure.Figure`
 (no GUI backend, no global pyplot state) and write PNGs:
 :func:`case_study_figures` (``clik demo``) and :func:`save_result_plots`
-(``clik solve --plots``). Importing this package neither imports pyplot nor
+(``clik solve --plots``), and :func:`task_errors` (one panel per task of a
+several-task run). Importing this package neither imports pyplot nor
 changes Matplotlib's backend.
 
 Artists clik adds besides the data carry a ``gid`` so that code (and tests)
@@ -34,6 +36,7 @@ Modules (imports go down this list, never up):
 - ``series``: the time series (:func:`tracking_error`, :func:`obstacle_distance`,
   :func:`joint`).
 - ``stick``: the stick drawing (:func:`planar_stick`).
+- ``tasks``: the tasks of a several-task run (:func:`task_error`, :func:`task_errors`).
 - ``case_study``: the paper's case-study figures and their constants.
 - ``overview``: the figures of ``clik solve --plots``.
 """
@@ -48,6 +51,7 @@ from clik.plot.case_study import (
 from clik.plot.overview import result_plots, save_result_plots
 from clik.plot.series import joint, obstacle_distance, tracking_error
 from clik.plot.stick import planar_stick
+from clik.plot.tasks import task_error, task_errors
 
 __all__ = [
     "CASE_STUDY_JOINT",
@@ -60,5 +64,7 @@ __all__ = [
     "planar_stick",
     "result_plots",
     "save_result_plots",
+    "task_error",
+    "task_errors",
     "tracking_error",
 ]

@@ -76,7 +76,7 @@ def save_result_plots(
     """Write :func:`result_plots` as PNGs into ``out`` (``clik solve --plots``).
 
     Files: ``tracking_error.png``, ``obstacle_distance.png`` (runs with obstacles),
-    ``joints.png``.
+    ``joints.png``, ``task_errors.png`` (runs of several tasks: one panel per task).
 
     Args:
         results: The results (overlaid when several).
@@ -87,4 +87,8 @@ def save_result_plots(
         The paths written.
     """
     figs = result_plots(results, names)
+    if any(len(r.task_errors) > 1 for r in results):
+        from clik.plot.tasks import task_errors
+
+        figs["task_errors"] = task_errors(results, list(names))
     return save_figures(((f"{key}.png", fig) for key, fig in figs.items()), out)

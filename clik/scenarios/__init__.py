@@ -3,7 +3,9 @@
 ``scenario`` reads and checks a file (with :mod:`clik.schema`), ``runner``
 turns a scenario into objects and runs it. The package also
 ships scenario files (the ``*.toml`` here, found with ``importlib.resources``):
-the case study of docs/method.md, laws (9) and (10).
+the case study of docs/method.md, laws (9) and (10), the Panda's, and
+``baxter_two_hands`` (several tasks: ``[[tasks]]``). ``build_tasks`` and ``task_tables``
+read and build several tasks, ``fields`` holds what several tables share.
 """
 
 from __future__ import annotations

@@ -8,13 +8,12 @@ timing, an unknown joint in a lock or override) are re-raised as
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
+from clik.constraints.constraint_set import ConstraintSet
 from clik.errors import (
     ClikError,
     FrameNotFound,
@@ -29,12 +28,20 @@ from clik.loop.tracking import ProgressCallback
 from clik.model.reach import reach_bound
 from clik.model.robot import Robot
 from clik.outputs.result import TrackingResult
+from clik.scenarios.build_tasks import (
+    SeveralTasks,
+    build_objectives,
+    build_several,
+    build_trajectory,
+    error_unit,
+)
 from clik.scenarios.scenario import Scenario, check_dt, load_scenario
 from clik.schema import Table
 from clik.speed.speed_limits import SpeedLimits
 from clik.speed.velocity_limits import run_within_limits
+from clik.tasks.goal import Goal
 from clik.tasks.task import Task
-from clik.trajectory import Circle, Hold, Line, PoseTrajectory, Slerp, Trajectory, Waypoints
+from clik.trajectory import Trajectory
 
 
 @dataclass
@@ -53,6 +60,8 @@ class Run:
     tracker: Tracker
     q0: np.ndarray
     speed_limits: SpeedLimits | None = None
+    goals: list[Goal] = field(default_factory=list)
+    """``[[tasks]]``: every goal (``task`` and ``trajectory`` are then the primary's)."""
 
     def execute(self, progress: ProgressCallback | None = None) -> TrackingResult:
         """Run the tracking loop (in re-timing passes when ``speed_limits`` is set)."""
@@ -61,7 +70,8 @@ class Run:
             key: solver[key] for key in ("record_every", "settle", "tolerance", "settling_time")
         }
         if self.speed_limits is None:
-            result = self.tracker.run(self.trajectory, self.q0, progress=progress, **kwargs)
+            trajectory = None if self.goals else self.trajectory  # each goal has its own
+            result = self.tracker.run(trajectory, self.q0, progress=progress, **kwargs)
         else:
             result = run_within_limits(
                 self.tracker, self.trajectory, self.q0, self.speed_limits, progress=progress,
@@ -77,6 +87,8 @@ class Run:
             result.info["unmonitored_geometries"] = list(scene.skipped_geometries)
         if self.scenario.robot.get("xacro_args"):
             result.info["robot_xacro_args"] = dict(self.scenario.robot["xacro_args"])
+        if self.goals:
+            result.info["task_units"] = {str(g.name): error_unit(g.task) for g in self.goals}
         return result
 
 
@@ -107,19 +119,7 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
     """
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
-    spec = scenario.robot
-    if robot is None:
-        try:
-            robot = Robot.load(
-                spec["source"],
-                package_dirs=spec["package_dirs"] or None,
-                lock=spec["lock"] or None,
-                xacro_args=spec.get("xacro_args") or None,
-            )
-        except (JointNotFound, InputError) as exc:
-            raise _where(scenario, _robot_key(exc), exc) from None
-        except ClikError as exc:
-            raise _where(scenario, "robot.source", exc) from None
+    robot = _robot(scenario) if robot is None else robot
     try:
         q0 = robot.check_configuration(
             robot.q_reference if scenario.initial_q is None else scenario.initial_q, "initial.q"
@@ -130,6 +130,52 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
         robot.check_within_limits(q0, "initial.q")
     except InfeasibleError as exc:
         raise InfeasibleError(f"{scenario.file}: {exc.field}", exc.problem) from None
+    several = None
+    if scenario.tasks:
+        several = build_several(scenario, robot, q0)
+        task, trajectory, duration = several.task, several.trajectory, several.duration
+        timed = any(t["trajectory"]["duration"] is None for t in scenario.tasks)
+    else:
+        task, trajectory = _single_task(scenario, robot, q0)
+        duration, timed = float(trajectory.duration), scenario.trajectory["duration"] is None
+    if timed:  # timed by cruise_speed: known only now
+        check_dt(Table({}, scenario.file, "solver"), scenario.solver["dt"], duration)
+    constraints = None
+    if scenario.has_constraints:
+        from clik.scenarios.build_constraints import build_constraints
+
+        constraints = build_constraints(scenario, robot, task)
+    tracker = _tracker(scenario, task, constraints, several)
+    try:  # a run too long, or a record too large for memory: said before any output
+        tracker.check_size(
+            duration + scenario.solver["settle"], int(scenario.solver["record_every"])
+        )
+    except InputError as exc:
+        raise _where(scenario, f"solver.{exc.field}", exc) from None
+    return Run(
+        scenario, robot, task, trajectory, tracker, q0, _speed_limits(scenario, robot),
+        goals=[] if several is None else several.goals,
+    )  # fmt: skip
+
+
+def _robot(scenario: Scenario) -> Robot:
+    """The scenario's ``[robot]``, loaded; errors at its keys."""
+    spec = scenario.robot
+    try:
+        return Robot.load(
+            spec["source"],
+            package_dirs=spec["package_dirs"] or None,
+            lock=spec["lock"] or None,
+            xacro_args=spec.get("xacro_args") or None,
+        )
+    except (JointNotFound, InputError) as exc:
+        raise _where(scenario, _robot_key(exc), exc) from None
+    except ClikError as exc:
+        raise _where(scenario, "robot.source", exc) from None
+
+
+def _single_task(scenario: Scenario, robot: Robot, q0: np.ndarray) -> tuple[Task, Trajectory]:
+    """``[task]`` and its ``[trajectory]``, from the start ``q0``."""
     try:
         task = Task(robot, scenario.task["frame"], scenario.task["kind"], scenario.task["axes"])
     except FrameNotFound as exc:
@@ -138,23 +184,21 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
         raise _where(scenario, exc.field, exc) from None
     start = task.placement(q0)
     try:
-        trajectory = build_trajectory(scenario.trajectory, task, start)
+        return task, build_trajectory(scenario.trajectory, task, start)
     except InputError as exc:
         _check_goal_reach(scenario, robot, task)  # name the real cause first
         raise _where(scenario, f"trajectory.{exc.field}", exc) from None
-    if scenario.trajectory["duration"] is None:  # timed by cruise_speed: known only now
-        check_dt(
-            Table({}, scenario.file, "solver"), scenario.solver["dt"], float(trajectory.duration)
-        )
-    constraints = None
-    if scenario.has_constraints:
-        from clik.scenarios.build_constraints import build_constraints
 
-        constraints = build_constraints(scenario, robot, task)
+
+def _tracker(
+    scenario: Scenario, task: Task, constraints: ConstraintSet | None, several: SeveralTasks | None
+) -> Tracker:
+    """The scenario's tracker: one task, or ``[[tasks]]`` and ``[[objectives]]``."""
     solver = scenario.solver
+    objectives = build_objectives(scenario, task.robot) if several is None else several.objectives
     try:
-        tracker = Tracker(
-            task,
+        return Tracker(
+            None if several else task,
             law=solver["law"],
             gain=solver["gain"],
             dt=solver["dt"],
@@ -162,21 +206,26 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
             constraints=constraints,
             engine=solver["engine"],
             joint_speed=_joint_speed(scenario),
+            tasks=None if several is None else several.goals,
+            objectives=objectives or None,
         )
     except JointNotFound as exc:
         raise _where(scenario, _joint_speed_key(scenario, exc.name), exc) from None
     except InputError as exc:
-        if exc.field.startswith("joint_speed"):
-            raise _where(scenario, f"constraints.{exc.field}", exc) from None
-        key = "solver.law" if exc.field == "constraints" else f"solver.{exc.field}"
-        raise _where(scenario, key, exc) from None
-    try:  # a run too long, or a record too large for memory: said before any output
-        tracker.check_size(
-            float(trajectory.duration) + solver["settle"], int(solver["record_every"])
-        )
-    except InputError as exc:
-        raise _where(scenario, f"solver.{exc.field}", exc) from None
-    return Run(scenario, robot, task, trajectory, tracker, q0, _speed_limits(scenario, robot))
+        raise _where(scenario, _tracker_key(scenario, exc.field), exc) from None
+
+
+def _tracker_key(scenario: Scenario, field: str) -> str:
+    """The scenario key of a field the tracker refused."""
+    if field.startswith("joint_speed"):
+        return f"constraints.{field}"
+    if field.startswith(("tasks", "objectives")):
+        names = [t["name"] for t in scenario.tasks]
+        for i, name in enumerate(names):  # the tracker names a task tasks['<name>'].<key>
+            if field.startswith(f"tasks[{name!r}]"):
+                return field.replace(f"tasks[{name!r}]", f"tasks[{i}]", 1)
+        return field.split(".")[0]
+    return "solver.law" if field == "constraints" else f"solver.{field}"
 
 
 def _joint_speed(scenario: Scenario) -> JointSpeed | None:
@@ -229,38 +278,6 @@ def _check_goal_reach(scenario: Scenario, robot: Robot, task: Task) -> None:
             f"the goal is out of reach: it lies {distance:.4g} m from joint {first!r}, farther "
             f"than the {reach:.4g} m that frame {task.frame!r} can reach",
         )
-
-
-def build_trajectory(spec: dict[str, Any], task: Task, start: pin.SE3) -> Trajectory:
-    """The trajectory of a scenario's ``[trajectory]`` table, starting at the frame's pose."""
-    p0 = start.translation.copy() if spec["start"] is None else np.asarray(spec["start"])
-    kind, duration, speed = spec["kind"], spec["duration"], spec.get("cruise_speed")
-    position: Trajectory
-    if kind == "line":
-        position = Line(p0, spec["goal"], duration=duration, cruise_speed=speed)
-    elif kind == "circle":
-        position = Circle.through(
-            p0, spec["center"], spec["normal"], spec["angle"], duration=duration, cruise_speed=speed
-        )
-    elif kind == "waypoints":
-        points = np.vstack([p0, np.asarray(spec["points"])])
-        position = Waypoints(
-            points, duration=duration, cruise_speed=speed, blend_radius=spec["blend_radius"]
-        )
-    else:
-        goal = p0 if spec["goal"] is None else np.asarray(spec["goal"])
-        position = Hold(position=goal, duration=duration)
-    if not task.has_orientation:
-        return position
-    R0 = start.rotation.copy()
-    rpy = spec["goal_rpy"]
-    if rpy is None:
-        orientation: Trajectory = Hold(rotation=R0, duration=position.duration)
-    else:
-        orientation = Slerp(R0, pin.rpy.rpyToMatrix(*rpy), duration=position.duration)
-    if not task.has_position:
-        return orientation
-    return PoseTrajectory(position, orientation)
 
 
 def run_scenario(

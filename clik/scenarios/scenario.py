@@ -16,6 +16,10 @@ converts per joint, and ``[constraints.joint_limits]`` keeps its overrides as wr
 beside their conversion to radians, for :func:`~clik.scenarios.build_constraints.build_constraints`
 to pick per joint.
 
+One task is ``[task]`` and ``[trajectory]``; several are ``[[tasks]]``, each with its
+``[tasks.trajectory]``, and ``[[objectives]]`` add eq. (5)'s null-space terms
+(:mod:`clik.scenarios.task_tables`). ``[task]`` and ``[[tasks]]`` together are refused.
+
 A scenario is data only: TOML has no code, no includes and no variables, and
 no key here names a file to read but ``robot.source``, ``robot.package_dirs``
 and an obstacle's mesh ``file``: paths the user chose (absolute, or relative
@@ -31,23 +35,21 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from clik.bounds import MAX_STEPS, SCALE_RANGE
 from clik.constraints.registry import TABLE_KINDS
 from clik.engine import ENGINES
 from clik.errors import ScenarioError
 from clik.model.joints import JointValues
 from clik.model.xacro_expand import is_xacro
+from clik.scenarios.fields import UNITS, angle_scale, gain_value, strings, trajectory_table
 from clik.scenarios.speed_tables import joint_speed_table, velocity_limits_table
+from clik.scenarios.task_tables import finish_tasks, primary, read_objectives, read_tasks
 from clik.scenarios.tolerance import read_tolerance
 from clik.schema import (
     MAX_ANGLE,
-    MAX_GAIN_DT,
     MAX_JOINT_VALUE,
     MAX_LENGTH,
     MAX_SPEED,
-    MIN_DURATION,
     MIN_SAMPLES,
     Table,
 )
@@ -57,18 +59,11 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-TRAJECTORY_KINDS = ("line", "circle", "waypoints", "hold")
-
 SHAPES = ("sphere", "box", "capsule", "cylinder", "mesh")
-UNITS = ("rad", "deg")
 
 
 PRISMATIC_THRESHOLD = 0.005
 """Default ``[constraints.joint_limits] prismatic_threshold`` [m]."""
-
-
-def _angle_scale(table: Table) -> float:
-    return math.pi / 180.0 if table.string("unit", "rad", UNITS) == "deg" else 1.0
 
 
 @dataclass
@@ -100,6 +95,11 @@ class Scenario:
     """The ``[constraints.joint_speed]`` table
     (:func:`~clik.scenarios.speed_tables.joint_speed_table`): the joint speed limits the
     law keeps (on by default)."""
+    tasks: list[dict[str, Any]] = field(default_factory=list)
+    """The ``[[tasks]]`` tables (:mod:`clik.scenarios.task_tables`); empty with ``[task]``.
+    With ``[[tasks]]``, ``task`` and ``trajectory`` are the primary task's."""
+    objectives: list[dict[str, Any]] = field(default_factory=list)
+    """The ``[[objectives]]`` tables (eq. (5), law (10))."""
     raw: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
@@ -151,26 +151,16 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
     ini = top.table("initial")
     unit = ini.string("unit", "rad", UNITS)
     q_raw = ini.raw("q", "reference")
-    q_bound = MAX_JOINT_VALUE / _angle_scale(ini)
+    q_bound = MAX_JOINT_VALUE / angle_scale(ini)
     initial_q = None if q_raw == "reference" else JointValues(ini.vector("q", bound=q_bound), unit)
     ini.done()
 
-    tsk = top.table("task", required=True)
-    task = {
-        "frame": tsk.string("frame"),
-        "kind": tsk.string("kind", "pose", ("position", "orientation", "pose")),
-        "axes": _strings(tsk, "axes") or None,
-    }
-    if tsk.has("axes") and task["axes"] is None:
-        raise tsk.error("axes", "a non-empty list of axis names (omit it for every axis)", [])
-    tsk.done()
-    has_orientation = task["kind"] != "position" and (
-        task["axes"] is None or any(a.startswith("r") for a in task["axes"])
-    )
-
-    trajectory = _trajectory(top.table("trajectory", required=True), folder, has_orientation)
-
-    solver = _solver(top.table("solver"), trajectory["duration"])
+    if top.has("tasks"):
+        tasks, task, trajectory, solver = _several_tasks(top, folder)
+    else:
+        tasks, (task, trajectory) = [], _single_task(top, folder)
+        solver = _solver(top.table("solver"), trajectory["duration"])
+    objectives = read_objectives(top.tables("objectives"), solver["law"])
 
     obstacles = [_obstacle(t, folder) for t in top.tables("obstacles")]
     names = [o["name"] for o in obstacles]
@@ -179,32 +169,60 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
     constraints = _constraints(top.table("constraints"), solver["dt"])
     velocity_limits = constraints.pop("velocity_limits")
     joint_speed = constraints.pop("joint_speed")
+    if tasks and velocity_limits["enabled"]:
+        raise ScenarioError(
+            file, "constraints.velocity_limits.enabled", "false with [[tasks]] (re-timing "
+            "slows one trajectory; several tasks have several)",
+        )  # fmt: skip
     top.done()
     return Scenario(
         file, name, robot, initial_q, task, trajectory, solver, obstacles, constraints,
-        velocity_limits=velocity_limits, joint_speed=joint_speed, raw=data,
+        velocity_limits=velocity_limits, joint_speed=joint_speed, tasks=tasks,
+        objectives=objectives, raw=data,
     )  # fmt: skip
 
 
-def _gain(table: Table, name: str, dt: float, default: Any = None) -> Any:
-    """A gain [1/s] (> 0), a number or (``per_row``) a list, with ``gain * dt <= MAX_GAIN_DT``."""
-    value = table.raw(name, default)
-    if isinstance(value, list):
-        gains = table.vector(name)
-        if any(g <= 0 for g in gains):
-            raise table.error(name, "positive numbers [1/s]", gains)
-    else:
-        gains = table.number(name, default, minimum=0.0, strict=True, unit="[1/s]")
-        if gains is None:
-            return None
-    if max(gains if isinstance(gains, list) else [gains]) * dt > MAX_GAIN_DT:
-        raise table.error(
-            name,
-            f"a gain [1/s] with gain * solver.dt <= {MAX_GAIN_DT:g} (solver.dt = {dt:g} s; "
-            "law (10) is stable only for gain * dt < 2)",
-            value,
-        )
-    return gains
+def _single_task(top: Table, folder: Path) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``[task]`` and ``[trajectory]``: one frame task and its trajectory."""
+    tsk = top.table("task", required=True)
+    task = {
+        "frame": tsk.string("frame"),
+        "kind": tsk.string("kind", "pose", ("position", "orientation", "pose")),
+        "axes": strings(tsk, "axes") or None,
+    }
+    if tsk.has("axes") and task["axes"] is None:
+        raise tsk.error("axes", "a non-empty list of axis names (omit it for every axis)", [])
+    tsk.done()
+    has_orientation = task["kind"] != "position" and (
+        task["axes"] is None or any(a.startswith("r") for a in task["axes"])
+    )
+    return task, trajectory_table(top.table("trajectory", required=True), folder, has_orientation)
+
+
+def _several_tasks(top: Table, folder: Path) -> tuple[Any, ...]:
+    """``[[tasks]]`` (:mod:`clik.scenarios.task_tables`) and ``[solver]``.
+
+    Returns:
+        The tasks, the primary's ``task`` and ``trajectory`` tables (what ``[task]`` and
+        ``[trajectory]`` hold for one task), and the solver.
+    """
+    for key, expected in (
+        ("task", "either [task] (one task) or [[tasks]] (several), not both"),
+        ("trajectory", "no [trajectory] with [[tasks]] (each has its [tasks.trajectory])"),
+    ):
+        if top.has(key):
+            raise ScenarioError(top.file, key, f"expected {expected}; this file has both")
+    tables = top.tables("tasks")
+    if not tables:
+        raise top.error("tasks", "at least one [[tasks]] table", [])
+    tasks = read_tasks(tables, folder)
+    durations = [t["trajectory"]["duration"] for t in tasks]
+    known = [d for d in durations if d is not None]
+    solver = _solver(top.table("solver"), max(known) if known else None)
+    finish_tasks(tables, tasks, solver)
+    main = primary(tasks)
+    task = {key: main[key] for key in ("frame", "kind", "axes")}
+    return tasks, task, main["trajectory"], solver
 
 
 def _solver(slv: Table, duration: float | None) -> dict[str, Any]:
@@ -214,7 +232,7 @@ def _solver(slv: Table, duration: float | None) -> dict[str, Any]:
         check_dt(slv, dt, duration)
     solver = {
         "law": slv.string("law", "transpose", ("transpose", "nonlinear", "pseudoinverse")),
-        "gain": _gain(slv, "gain", dt, 1000.0),
+        "gain": gain_value(slv, "gain", dt, 1000.0),
         "dt": dt,
         "damping": slv.number("damping", 0.0, minimum=0.0, bound=MAX_LENGTH),
         "record_every": slv.number("record_every", 1, minimum=1, integer=True),
@@ -255,7 +273,7 @@ def _robot(rob: Table, folder: Path) -> dict[str, Any]:
     looks_like_path = source.endswith((".urdf", ".xacro")) or "/" in source or "\\" in source
     robot = {
         "source": _resolve(folder, source) if looks_like_path else source,
-        "package_dirs": [_resolve(folder, p) for p in _strings(rob, "package_dirs")],
+        "package_dirs": [_resolve(folder, p) for p in strings(rob, "package_dirs")],
         "lock": rob.mapping("lock", lambda t, k: float(t.number(k, bound=MAX_JOINT_VALUE))),
         "xacro_args": rob.mapping("xacro_args", lambda t, k: t.string(k)),
     }
@@ -267,57 +285,6 @@ def _robot(rob: Table, folder: Path) -> dict[str, Any]:
     return robot
 
 
-def _strings(table: Table, name: str) -> list[str]:
-    value = table.raw(name, [])
-    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-        raise table.error(name, "a list of strings", value)
-    return value
-
-
-def _trajectory(tr: Table, folder: Path, has_orientation: bool = True) -> dict[str, Any]:
-    kind = tr.string("kind", choices=TRAJECTORY_KINDS)
-    scale = _angle_scale(tr)
-    out: dict[str, Any] = {"kind": kind}
-    out["start"] = tr.vector("start", 3, None, "[m]", MAX_LENGTH)
-    if kind in ("line", "hold"):
-        out["goal"] = tr.vector("goal", 3, None if kind == "hold" else ..., "[m]", MAX_LENGTH)
-        if out["goal"] is ...:
-            raise tr.error("goal", "a list of 3 numbers [m]")
-    if kind == "circle":
-        out["center"] = tr.vector("center", 3, unit="[m]", bound=MAX_LENGTH)
-        out["normal"] = tr.vector("normal", 3, [0.0, 0.0, 1.0], bound=SCALE_RANGE[1])
-        if np.linalg.norm(out["normal"]) == 0.0:
-            raise tr.error("normal", "a non-zero vector", out["normal"])
-        angle = tr.number("angle", None, bound=MAX_ANGLE / scale)
-        out["angle"] = 2.0 * math.pi if angle is None else angle * scale
-        if out["angle"] == 0.0:
-            raise tr.error("angle", "a non-zero angle", angle)
-    if kind == "waypoints":
-        out["points"] = tr.matrix("points", 3, unit="[m]", bound=MAX_LENGTH)
-        out["blend_radius"] = tr.number(
-            "blend_radius", 0.0, minimum=0.0, unit="[m]", bound=MAX_LENGTH
-        )
-    if kind == "hold":
-        out["duration"] = tr.number("duration", None, minimum=0.0, unit="[s]")
-    else:
-        out["duration"] = tr.number("duration", None, minimum=0.0, strict=True, unit="[s]")
-        if out["duration"] is not None and out["duration"] < MIN_DURATION:
-            raise tr.error("duration", f"a number >= {MIN_DURATION:g} [s]", out["duration"])
-        out["cruise_speed"] = tr.number(
-            "cruise_speed", None, minimum=0.0, strict=True, unit="[m/s]", bound=MAX_SPEED
-        )
-    if kind == "hold" and out["duration"] is None:
-        raise tr.error("duration", "a number >= 0 [s]")
-    if kind != "hold" and out["duration"] is None and out.get("cruise_speed") is None:
-        raise tr.error("duration", "a duration [s] or a cruise_speed")
-    rpy = tr.vector("goal_rpy", 3, None, bound=MAX_ANGLE / scale)
-    if rpy is not None and not has_orientation:
-        raise tr.error("goal_rpy", "no goal_rpy: the task has no orientation rows", rpy)
-    out["goal_rpy"] = None if rpy is None else [v * scale for v in rpy]
-    tr.done()
-    return out
-
-
 def _obstacle(ob: Table, folder: Path) -> dict[str, Any]:
     shape = ob.string("shape", choices=SHAPES)
     out: dict[str, Any] = {
@@ -325,7 +292,7 @@ def _obstacle(ob: Table, folder: Path) -> dict[str, Any]:
         "shape": shape,
         "position": ob.vector("position", 3, unit="[m]", bound=MAX_LENGTH),
     }
-    scale = _angle_scale(ob)
+    scale = angle_scale(ob)
     rpy = ob.vector("rpy", 3, [0.0, 0.0, 0.0], bound=MAX_ANGLE / scale)
     out["rpy"] = [v * scale for v in rpy]
     out["velocity"] = ob.vector("velocity", 3, [0.0, 0.0, 0.0], "[m/s]", MAX_SPEED)
@@ -369,12 +336,12 @@ def _constraints(ct: Table, dt: float) -> dict[str, Any]:
         "gain": _scalar_gain(obs, dt),
         "form": obs.string("form", "normalized", ("normalized", "squared")),
         "release": obs.string("release", None, ("projection", "sign")),
-        "links": _strings(obs, "links") or None,
+        "links": strings(obs, "links") or None,
     }
     obs.done()
     jl = ct.table("joint_limits")
     unit = jl.string("unit", "rad", UNITS)
-    scale = _angle_scale(jl)
+    scale = angle_scale(jl)
     written: dict[str, dict[str, float]] = {}
     ov = jl.table("override")
     for joint in list(ov.data):
@@ -436,7 +403,7 @@ def _scalar_gain(table: Table, dt: float) -> Any:
     value = table.raw("gain", None)
     if isinstance(value, list):
         raise table.error("gain", "a number > 0 [1/s]", value)
-    return _gain(table, "gain", dt)
+    return gain_value(table, "gain", dt)
 
 
 def _dexterity(dx: Table, dt: float) -> dict[str, Any]:

@@ -84,56 +84,36 @@ def solve(
         task: The task (its mask selects which components must match).
         target: Target pose (``pin.SE3`` or 4x4), position (3,) or rotation (3, 3).
         q0: Start configuration (default: the robot's reference configuration).
+        tasks: Several tasks instead of ``task`` and ``target`` (``clik.Goal``, each target
+            its trajectory's final value; :mod:`clik.solving.stack_solve`).
+        objectives: With ``tasks``, eq. (5)'s objectives below the levels.
         law: ``"pseudoinverse"`` (10) (default) or ``"transpose"`` (9).
         step: ``alpha dt``, the fraction of the law's velocity applied per iteration.
         damping: ``lambda_0`` of the damped pseudoinverse.
         mu: Levenberg-Marquardt factor: ``lambda^2 = lambda_0^2 + mu |e|^2``.
         tolerance: Position tolerance [m].
         orientation_tolerance: Orientation tolerance [rad].
-        max_iterations: Iterations per attempt, an integer >= 1 (at most
-            :data:`~clik.bounds.MAX_ITERATIONS`).
-        restarts: Random restarts (within joint limits) after a failed attempt, an integer
-            >= 0 (at most :data:`~clik.bounds.MAX_RESTARTS`).
+        max_iterations: Iterations per attempt, an integer in [1, ``clik.bounds.MAX_ITERATIONS``].
+        restarts: Random restarts within the limits, in [0, ``clik.bounds.MAX_RESTARTS``].
         seed: Seed of the restarts' random generator, an integer >= 0 (None: fresh entropy).
-        engine: ``"compiled"`` (default) runs the iteration in clik's C++ engine;
-            ``"python"`` runs the code of this module. Both give the same results
-            (the same restarts from the same seed; ``q`` equal to rounding).
-        constraints: Obstacle, joint-range and link-pair constraints (the
-            :class:`~clik.constraints.ConstraintSet` :func:`clik.track` takes), obstacles
-            at rest. The pose returned on success keeps every monitored link at least its
-            obstacle's threshold away and every joint at least ``d_q`` inside its range
-            (checked with coal); a failure's ``reason`` and ``blocked_by`` name the
-            constraint that blocks the target. None (default): no constraint, no check.
-            See :mod:`clik.solving.constrained_solve`.
-        tracking_attempts: With ``constraints``, the starts of the constrained law (10)
-            tried when the unconstrained pose misses a constraint.
-        tasks: Several tasks instead of ``task`` and ``target`` (``clik.Goal``, each
-            target its trajectory's final value): every task of the first priority
-            level reaches its target (:mod:`clik.solving.stack_solve`; law (10) by
-            levels, ``step`` its ``K dt``); ``mu`` and ``tracking_attempts`` unused.
-        objectives: With ``tasks``, eq. (5)'s objectives below the levels.
-
-    A task and a constraint set may serve solves in several threads at once: each solve
-    has its own Pinocchio data and solver.
+        engine: ``"compiled"`` (default: clik's C++ engine) or ``"python"`` (this module);
+            both give the same results (the same restarts; ``q`` equal to rounding).
+        constraints: Obstacle, joint-range and link-pair constraints, obstacles at rest: the
+            pose returned keeps clear of them, a failure names the constraint that blocks
+            the target (:mod:`clik.solving.constrained_solve`). None: no check.
+        tracking_attempts: With ``constraints``, the starts of the constrained law (10).
 
     Raises:
         InputError: A bad argument, named; or the robot's model changed after loading.
     """
     if seed is not None and (type(seed) is not int or seed < 0):
         check_seed(seed)  # raises unless a NumPy integer >= 0
-    if tasks is not None or objectives is not None:
-        if task is not None or target is not None or tasks is None:
-            raise InputError("tasks", "either task and target, or tasks (a list of clik.Goal)")
-        if law != "pseudoinverse":
-            raise InputError("law", "'pseudoinverse' (law (10) by levels) with tasks", law)
-        stacked: dict[str, Any] = {
-            "step": step, "damping": damping, "tolerance": tolerance,
+    if tasks is not None or objectives is not None or task is None or target is None:
+        return solve_tasks(task, target, tasks, q0, constraints, objectives, {
+            "law": law, "step": step, "damping": damping, "tolerance": tolerance,
             "orientation_tolerance": orientation_tolerance, "max_iterations": max_iterations,
             "restarts": restarts, "seed": seed, "engine": engine,
-        }  # fmt: skip
-        return solve_tasks(tasks, q0, stacked, constraints, objectives)
-    if task is None or target is None:
-        raise InputError("task", "a task and a target (or tasks=[clik.Goal, ...])")
+        })  # fmt: skip
     if constraints is not None:
         given: dict[str, Any] = {
             "law": law, "step": step, "damping": damping, "mu": mu, "tolerance": tolerance,

@@ -25,6 +25,7 @@ import numpy as np
 from clik.errors import InputError
 from clik.loop.task_stack import TaskStack
 from clik.loop.tracker import ReachWarning, Tracker
+from clik.solving.solve_problem import SolveSettings, check_seed, check_settings
 from clik.solving.solve_result import SolveResult
 from clik.tasks.goal import Goal
 from clik.trajectory.joint_path import JointReference
@@ -57,47 +58,39 @@ class HeldEnd:
 
 
 def solve_tasks(
-    goals: Sequence[Goal],
+    task: object,
+    target: object,
+    goals: Sequence[Goal] | None,
     q0: object,
+    constraints: ConstraintSet | None,
+    objectives: Sequence[Objective] | None,
     settings: dict[str, Any],
-    constraints: ConstraintSet | None = None,
-    objectives: Sequence[Objective] | None = None,
 ) -> SolveResult:
     """:func:`clik.solve` with several tasks (the module's method).
 
     Args:
+        task: None (``solve``'s single task: refused with ``goals``).
+        target: None, likewise.
         goals: The goals; each target is its trajectory's final value.
         q0: Start configuration (None: the robot's reference).
-        settings: ``solve``'s ``step``, ``damping``, ``tolerance``,
-            ``orientation_tolerance``, ``max_iterations``, ``restarts``, ``seed``, ``engine``.
         constraints: Constraint rows kept while iterating (law (10): constraints first).
         objectives: Eq. (5)'s objectives, below the levels.
+        settings: ``solve``'s ``law``, ``step``, ``damping``, ``tolerance``,
+            ``orientation_tolerance``, ``max_iterations``, ``restarts``, ``seed``, ``engine``.
 
     Raises:
         InputError: A bad goal or setting (named).
     """
     s = settings
-    stack = TaskStack(goals)
+    stack = _checked(task, target, goals, s)
     held = [
         Goal(g.task, HeldEnd(g.trajectory), name=n, priority=g.priority)
         for g, n in zip(stack.goals, stack.names, strict=True)
     ]
-    for name in ("max_iterations", "restarts"):
-        value = s[name]
-        if (
-            isinstance(value, bool)
-            or not isinstance(value, int)
-            or value < (1 if name == "max_iterations" else 0)
-        ):
-            raise InputError(
-                name, "an integer >= 1" if name == "max_iterations" else "an integer >= 0", value
-            )
-    step = float(s["step"])
-    if not (math.isfinite(step) and 0.0 < step < 2.0):
-        raise InputError("step", "a number in (0, 2): K dt of law (10)'s iteration", s["step"])
     tracker = Tracker(
-        tasks=held, law="pseudoinverse", gain=step / DT, dt=DT, damping=float(s["damping"]),
-        constraints=constraints, engine=s["engine"], joint_speed=None, objectives=objectives,
+        tasks=held, law="pseudoinverse", gain=float(s["step"]) / DT, dt=DT,
+        damping=float(s["damping"]), constraints=constraints, engine=s["engine"],
+        joint_speed=None, objectives=objectives,
     )  # fmt: skip
     robot = stack.robot
     q = robot.check_configuration(robot.q_reference if q0 is None else q0, "q0")
@@ -108,21 +101,18 @@ def solve_tasks(
     for attempt in range(1, s["restarts"] + 2):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ReachWarning)
-            result = tracker.run(
-                q0=q, settle=s["max_iterations"] * DT, record_every=s["max_iterations"] + 1
-            )
+            n = s["max_iterations"]
+            result = tracker.run(q0=q, settle=n * DT, record_every=n + 1)
         iterations += result.steps
         pos, rot = _largest_errors([result.task_errors[n] for n in top])
         q_end = result.q[-1].copy()
         inside = bool(np.all(q_end >= robot.lower - 1e-9) and np.all(q_end <= robot.upper + 1e-9))
+        wall = time.perf_counter() - start
         if pos <= s["tolerance"] and rot <= s["orientation_tolerance"] and inside:
             reason = f"converged in {iterations} iterations ({len(stack.goals)} tasks)"
-            return SolveResult(
-                True, reason, q_end, iterations, attempt, pos, rot, time.perf_counter() - start
-            )
+            return SolveResult(True, reason, q_end, iterations, attempt, pos, rot, wall)
         if pos + rot < best[0]:
-            why = "" if inside else "; a joint left its range"
-            best = (pos + rot, q_end, pos, rot, why)
+            best = (pos + rot, q_end, pos, rot, "" if inside else "; a joint left its range")
         if attempt <= s["restarts"]:
             rng = np.random.default_rng(s["seed"]) if rng is None else rng
             q = robot.random_configuration(rng)
@@ -131,9 +121,36 @@ def solve_tasks(
         f"not converged after {s['restarts'] + 1} attempt(s), {iterations} iterations: the "
         f"first level's largest errors are {pos:.3g} m and {rot:.3g} rad{why}"
     )
-    return SolveResult(
-        False, reason, q_best, iterations, s["restarts"] + 1, pos, rot, time.perf_counter() - start
+    attempts, wall = s["restarts"] + 1, time.perf_counter() - start
+    return SolveResult(False, reason, q_best, iterations, attempts, pos, rot, wall)
+
+
+def _checked(
+    task: object, target: object, goals: Sequence[Goal] | None, s: dict[str, Any]
+) -> TaskStack:
+    """The goals as a stack, and the settings, checked (an ``InputError`` names a bad one)."""
+    if task is not None or target is not None or goals is None:
+        if goals is None:
+            raise InputError("task", "a task and a target (or tasks=[clik.Goal, ...])")
+        raise InputError("tasks", "either task and target, or tasks (a list of clik.Goal)")
+    if s["law"] != "pseudoinverse":
+        raise InputError("law", "'pseudoinverse' (law (10) by levels) with tasks", s["law"])
+    check_settings(
+        SolveSettings(
+            s["law"],
+            s["step"],
+            s["damping"],
+            0.0,
+            s["tolerance"],
+            s["orientation_tolerance"],
+            s["max_iterations"],
+            s["restarts"],
+        )
     )
+    if not float(s["step"]) < 2.0:
+        raise InputError("step", "a number in (0, 2): K dt of law (10)'s iteration", s["step"])
+    check_seed(s["seed"])
+    return TaskStack(goals)
 
 
 def _largest_errors(entries: list[dict[str, Any]]) -> tuple[float, float]:

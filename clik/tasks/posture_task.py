@@ -2,7 +2,7 @@ r"""The posture task: chosen joints follow a joint-space reference ``q_d(t)``.
 
 docs/method.md, "Several tasks". Each row is one joint: its error is
 ``e_i = q_{d,i} - q_i`` [rad or m] (a continuous joint's angle difference wrapped
-into ``(-pi, pi]``), its Jacobian row the unit row of the joint's velocity, and its
+into ``[-pi, pi)``), its Jacobian row the unit row of the joint's velocity, and its
 feed-forward ``qdot_{d,i}``. At a lower priority than the hands it chooses the
 redundant arm's free motion (the elbow); at the same priority it is a soft pull,
 weighted by its gain.

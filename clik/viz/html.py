@@ -27,6 +27,7 @@ from clik.viz.scene import Geometry, build_scene
 if TYPE_CHECKING:
     from clik.model.robot import Robot
     from clik.outputs.result import TrackingResult
+    from clik.tasks.goal import Goal
 
 
 def _viewer_js() -> Path:
@@ -154,6 +155,7 @@ def export_html(
     geometry: Geometry = "visual",
     fps: float = 30.0,
     robot: Robot | None = None,
+    tasks: Sequence[Goal] | None = None,
 ) -> Path:
     """Write a result's animated 3-D scene as one self-contained HTML file.
 
@@ -170,6 +172,8 @@ def export_html(
             smaller files.
         robot: The robot, when ``result.robot`` is not set (e.g. a result read
             with :meth:`~clik.outputs.result.TrackingResult.load`).
+        tasks: The goals of a several-task run: each task's reference and path are
+            drawn and named in the legend (see :func:`~clik.viz.scene.build_scene`).
 
     Returns:
         The path written.
@@ -178,9 +182,9 @@ def export_html(
         InputError: See :func:`clik.viz.scene.build_scene`.
     """
     path = Path(path)
-    scene = build_scene(result, robot=robot, geometry=geometry, fps=fps)
+    scene = build_scene(result, robot=robot, geometry=geometry, fps=fps, tasks=tasks)
     title, caption = scene_title(result)
-    text = page(Recorder().extend(scene.commands).messages, title, caption)
+    text = page(Recorder().extend(scene.commands).messages, title, caption, scene.legend)
     atomic_write(path, lambda f: f.write(text), mode="w")
     path.chmod(0o644)  # the temporary file was private; a scene is meant to be shared
     return path

@@ -11,6 +11,7 @@ import html
 import os
 import time
 import webbrowser
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -22,6 +23,7 @@ from clik.viz.target import load_target
 if TYPE_CHECKING:
     from clik.model.robot import Robot
     from clik.outputs.result import TrackingResult
+    from clik.tasks.goal import Goal
 
 _server: MeshcatServer | None = None
 
@@ -62,6 +64,7 @@ def show(
     fps: float = 30.0,
     robot: Robot | None = None,
     inline: bool | None = None,
+    tasks: Sequence[Goal] | None = None,
 ) -> str:
     """Show a result live: robot, obstacles, paths, witness segments, animated.
 
@@ -78,6 +81,8 @@ def show(
         fps: Animation frames per second of run time [1/s].
         robot: The robot, when ``result.robot`` is not set.
         inline: Display inline; default: when running in a notebook.
+        tasks: The goals of a several-task run: each task's reference and path are
+            drawn and named in the legend (see :func:`~clik.viz.scene.build_scene`).
 
     Returns:
         The viewer's URL (``http://127.0.0.1:<port>/static/``).
@@ -86,7 +91,7 @@ def show(
         InputError: See :func:`clik.viz.scene.build_scene`.
         ServerError: The server could not be started or did not answer.
     """
-    scene = build_scene(result, robot=robot, geometry=geometry, fps=fps)
+    scene = build_scene(result, robot=robot, geometry=geometry, fps=fps, tasks=tasks)
     server = live_server()
     server.send_all(scene.commands)
     url = server.web_url
@@ -97,7 +102,7 @@ def show(
         from IPython.display import HTML, display
 
         title, caption = scene_title(result)
-        text = page(Recorder().extend(scene.commands).messages, title, caption)
+        text = page(Recorder().extend(scene.commands).messages, title, caption, scene.legend)
         display(
             HTML(
                 f'<div style="width: 100%; height: {INLINE_HEIGHT_PX}px">'

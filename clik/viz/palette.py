@@ -55,3 +55,21 @@ LEGEND = (
     (REGION, "workspace box, tool cone"),
 )
 """``(colour, label)`` of each element of the tracking scene's legend (the HTML caption)."""
+
+TASKS = (
+    (0.85, 0.2, 0.45),
+    (0.6, 0.9, 0.2),
+    (0.0, 0.45, 0.45),
+    (0.45, 0.75, 1.0),
+    (0.45, 0.5, 0.0),
+    (0.5, 0.0, 0.15),
+    (0.3, 0.4, 0.55),
+    (0.4, 0.9, 0.7),
+)
+"""Colours of a several-task run's other tasks (rose, lime, teal, sky, olive, maroon,
+slate, mint), in the order of the run's rows (:mod:`clik.viz.task_layer`): each task's
+path and reference in one colour, its legend entry the task's name. They keep the same
+CIELAB distance from each other, from :data:`LEGEND` and from the background; a run
+with more tasks reuses them in turn."""
+TASK_REFERENCE_OPACITY = 0.45
+"""Opacity of a task's reference line (its path is drawn opaque over it)."""

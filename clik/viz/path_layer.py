@@ -34,13 +34,19 @@ MAX_PIECES = 200
 """Most pieces of the growing trail."""
 
 
-def _line(points: np.ndarray, rgb: tuple[float, float, float], name: str) -> dict[str, Any]:
+def line_object(
+    points: np.ndarray, rgb: tuple[float, float, float], name: str, opacity: float = 1.0
+) -> dict[str, Any]:
+    """A polyline through ``points`` (N, 3) [m] in colour ``rgb``, translucent below 1."""
     geometry = {
         "uuid": new_uuid(),
         "type": "BufferGeometry",
         "data": {"attributes": {"position": buffer_attribute(points)}},
     }
-    return scene_object("Line", geometry, line_material(rgb), name=name)
+    material = line_material(rgb)
+    if opacity < 1.0:
+        material.update(transparent=True, opacity=float(opacity), depthWrite=False)
+    return scene_object("Line", geometry, material, name=name)
 
 
 def subsample(points: np.ndarray, limit: int = MAX_POINTS) -> np.ndarray:
@@ -57,14 +63,19 @@ def reference_commands(reference: np.ndarray | None) -> list[Command]:
     if reference is None or len(reference) < 2 or not np.all(np.isfinite(reference)):
         return []
     return [
-        set_object(f"{ROOT}/reference", _line(subsample(reference), palette.REFERENCE, "reference"))
+        set_object(
+            f"{ROOT}/reference", line_object(subsample(reference), palette.REFERENCE, "reference")
+        )
     ]
 
 
 def trail_commands(
-    position: np.ndarray, timeline: Timeline
+    position: np.ndarray,
+    timeline: Timeline,
+    root: str = f"{ROOT}/trail",
+    rgb: tuple[float, float, float] = palette.TRAIL,
 ) -> tuple[list[Command], dict[str, list[dict[str, Any]]]]:
-    """Trail pieces and their visibility tracks.
+    """Trail pieces (under ``root``, in colour ``rgb``) and their visibility tracks.
 
     Piece ``k`` joins the samples shown between two consecutive frames and
     appears at the later frame's time.
@@ -81,8 +92,8 @@ def trail_commands(
         if i1 <= i0:
             continue
         points = subsample(position[i0 : i1 + 1], per_piece)
-        path = f"{ROOT}/trail/{b:04d}"
-        commands.append(set_object(path, _line(points, palette.TRAIL, f"trail {b}")))
+        path = f"{root}/{b:04d}"
+        commands.append(set_object(path, line_object(points, rgb, f"trail {b}")))
         appear = float(timeline.times[b])
         times, values = [0.0, appear], [False, True]
         if appear < timeline.duration:

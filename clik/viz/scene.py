@@ -6,6 +6,8 @@ self-contained HTML file (:func:`clik.viz.export_html`). Scene tree:
 - ``/meshcat/robot/<joint>/<geometry>``: the robot (visual or collision geometry);
 - ``/meshcat/obstacles/<name>/{body,shell}``: obstacles and threshold shells;
 - ``/meshcat/paths/reference`` and ``/meshcat/paths/trail/<k>``: the task frame's paths;
+- ``/meshcat/tasks/<name>/...``: a several-task run's other tasks, when the scene is
+  given the run's goals (:mod:`clik.viz.task_layer`);
 - ``/meshcat/regions/<name>``: workspace boxes and tool cones (:mod:`clik.viz.shape_layer`);
 - ``/meshcat/witness/...``: witness segments of the obstacle rows;
 
@@ -33,12 +35,19 @@ from clik.viz.robot_layer import (
     robot_commands,
 )
 from clik.viz.shape_layer import region_layer
+from clik.viz.task_layer import Legend, scene_legend, task_layer
+from clik.viz.task_paths import TaskPath, task_paths
 from clik.viz.timeline import Timeline, frame_origins, joint_placements
 from clik.viz.witness_layer import monitor_segments, row_segments
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    import pinocchio as pin
+
     from clik.model.robot import Robot
     from clik.outputs.result import TrackingResult
+    from clik.tasks.goal import Goal
 
 Geometry = Literal["visual", "collision"]
 """Which of the robot's geometry models is drawn."""
@@ -56,6 +65,8 @@ class Scene:
         view: Default camera.
         robot_nodes: Scene paths of the robot's joint nodes.
         obstacle_nodes: Scene paths of the obstacles.
+        tasks: The tasks' paths drawn (a several-task run's, when its goals were given).
+        legend: ``(colour, label)`` of each legend entry (the HTML caption).
     """
 
     commands: list[Command]
@@ -63,6 +74,8 @@ class Scene:
     view: View
     robot_nodes: list[str] = field(default_factory=list)
     obstacle_nodes: list[str] = field(default_factory=list)
+    tasks: list[TaskPath] = field(default_factory=list)
+    legend: Legend = field(default_factory=lambda: list(palette.LEGEND))
 
 
 def result_robot(result: TrackingResult, robot: Robot | None) -> Robot:
@@ -90,6 +103,7 @@ def build_scene(
     geometry: Geometry = "visual",
     fps: float = 30.0,
     play: bool = True,
+    tasks: Sequence[Goal] | None = None,
 ) -> Scene:
     """Commands that draw ``result`` and animate it in real time.
 
@@ -100,23 +114,21 @@ def build_scene(
             A robot without visual geometry is drawn with its collision geometry.
         fps: Animation frames per second of run time [1/s].
         play: Start playing when the scene is loaded.
+        tasks: A several-task run's goals (a result does not keep them): each task's
+            reference and path in a colour of its own, named in the legend.
 
     Returns:
         The scene.
 
     Raises:
         InputError: No robot, a configuration size that does not match it, an
-            unknown ``geometry`` or a bad ``fps``.
+            unknown ``geometry``, a bad ``fps``, or ``tasks`` not the run's goals.
     """
-    if geometry not in GEOMETRIES:
-        raise InputError("geometry", " or ".join(repr(g) for g in GEOMETRIES), got=geometry)
     robot = result_robot(result, robot)
+    gmodel = _geometry_model(robot, geometry)
     timeline = Timeline.from_times(result.t, fps)
     model = robot.model
     q = np.asarray(result.q)[timeline.index]
-    gmodel = robot.visual_model if geometry == "visual" else robot.collision_model
-    if geometry == "visual" and gmodel.ngeoms == 0:
-        gmodel = robot.collision_model
 
     commands: list[Command] = [
         delete("/meshcat"),
@@ -143,12 +155,12 @@ def build_scene(
     commands += region_cmds
     clips.update(region_clips)
 
-    commands += reference_commands(result.reference_position)
-    trail, trail_clips = trail_commands(np.asarray(result.position), timeline)
-    commands += trail
-    clips.update(trail_clips)
-
-    for layer in (row_segments(result, timeline), monitor_segments(robot, result, timeline)):
+    paths = [] if tasks is None else task_paths(result, tasks, robot)
+    for layer in (
+        _path_layer(result, paths, timeline),
+        row_segments(result, timeline),
+        monitor_segments(robot, result, timeline),
+    ):
         commands += layer[0]
         clips.update(layer[1])
 
@@ -157,13 +169,46 @@ def build_scene(
     commands.append(set_animation(clips if animated else {}, play=play and animated))
 
     motion, extents = _shown_points(robot, result, q, obstacles)
+    motion = np.vstack([motion, *_task_points(paths)])
     view = default_view(np.vstack([motion, extents]), planar=is_planar(motion))
     commands += view.commands()
     robot_nodes = sorted(
         {p for p in clips if p.startswith("/meshcat/robot/") and not p.endswith("<object>")}
     )
     obstacle_nodes = [f"/meshcat/obstacles/{o['name']}" for o in obstacles]
-    return Scene(commands, timeline, view, robot_nodes, obstacle_nodes)
+    return Scene(commands, timeline, view, robot_nodes, obstacle_nodes, paths, scene_legend(paths))
+
+
+def _geometry_model(robot: Robot, geometry: Geometry) -> pin.GeometryModel:
+    """The geometry drawn: visual meshes (collision geometry when there are none).
+
+    Raises:
+        InputError: An unknown ``geometry``.
+    """
+    if geometry not in GEOMETRIES:
+        raise InputError("geometry", " or ".join(repr(g) for g in GEOMETRIES), got=geometry)
+    gmodel = robot.visual_model if geometry == "visual" else robot.collision_model
+    return robot.collision_model if gmodel.ngeoms == 0 else gmodel
+
+
+def _path_layer(
+    result: TrackingResult, paths: list[TaskPath], timeline: Timeline
+) -> tuple[list[Command], dict[str, list[dict[str, Any]]]]:
+    """The primary task's reference and trail, then the other tasks' (when given)."""
+    commands = reference_commands(result.reference_position)
+    trail, clips = trail_commands(np.asarray(result.position), timeline)
+    task_cmds, task_clips = task_layer(paths, timeline)
+    return commands + trail + task_cmds, {**clips, **task_clips}
+
+
+def _task_points(paths: list[TaskPath]) -> list[np.ndarray]:
+    """The tasks' paths and references (finite points), for framing the view."""
+    points = [np.empty((0, 3))]
+    for path in paths:
+        for p in (path.achieved, path.reference):
+            if p is not None:
+                points.append(p[np.all(np.isfinite(p), axis=1)])
+    return points
 
 
 def _shown_points(

@@ -320,3 +320,24 @@ def test_solve_reaches_both_hands_poses(baxter: clik.Robot, engine: str) -> None
     assert np.all(result.q >= baxter.lower) and np.all(result.q <= baxter.upper)
     with pytest.raises(clik.InputError, match="either task and target"):
         clik.solve(hands[0], targets[0], tasks=goals)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("law", ["transpose", "nonlinear"])
+def test_laws_9_and_8_weigh_tasks_by_gain(baxter: clik.Robot, engine: str, law: str) -> None:
+    """One level: every task's rows in one extended task, each weighted by its gain."""
+    q0 = bent(baxter)
+    left = clik.Task(baxter, "left_hand_link", "position")
+    right = clik.Task(baxter, "right_hand_link", "position")
+    shift = np.array([0.05, 0.0, 0.1])
+    pl, pr = left.placement(q0).translation, right.placement(q0).translation
+    goals = [
+        clik.Goal(left, Line(pl, pl + shift, 2.0), name="left"),
+        clik.Goal(right, Line(pr, pr + shift, 2.0), name="right", gain=500),
+    ]
+    result = clik.track(tasks=goals, q0=q0, law=law, gain=1000, engine=engine)
+    assert_completed(result, baxter)
+    errors = result.task_errors
+    assert errors["left"]["max"] <= 1e-3
+    if law == "transpose":  # the lag of (9) goes as 1 / K: half the gain, twice the error
+        assert 1.5 <= errors["right"]["max"] / errors["left"]["max"] <= 2.5

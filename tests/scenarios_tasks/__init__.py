@@ -1,0 +1,1 @@
+"""Tests of the scenario keys of several tasks: ``[[tasks]]`` and ``[[objectives]]``."""
