@@ -33,6 +33,8 @@ POSTURE_GAIN = 10.0
 """Gain of clik's posture task (level 2) [1/s]."""
 PINK_POSTURE_COST = 1e-3
 """Cost of pink's posture task (its frame tasks' costs are 1)."""
+MIN_DURATION = 1.0
+"""Shortest line [s] (``--quick``'s too): 10 cm in less would outrun the joints' limits."""
 BENT = {"s1": -0.6, "e1": 1.2, "w1": 0.9}
 """Both arms' start (the reference posture is near-singular) [rad]."""
 
@@ -169,7 +171,7 @@ def dual_arm_variants(
     config: BenchConfig, engines: tuple[str, ...], pink: Pink | None
 ) -> list[Variant]:
     """Clik's dual-arm line in each engine, and pink's when installed."""
-    problem = dual_arm(max(config.panda_duration, DT))
+    problem = dual_arm(max(config.panda_duration, MIN_DURATION))
     variants = [clik_dual_arm_variant(problem, e) for e in engines]
     if pink is not None:
         variants.append(pink_dual_arm_variant(pink, problem))

@@ -62,6 +62,7 @@ CLIK_STEP_US = {
     "panda_pose_obstacles_0_active": "panda_pose_obstacles_0_active",
     "panda_pose_obstacles_1_active": "panda_pose_obstacles_1_active",
     "panda_pose_obstacles_transpose": "panda_pose_obstacles_transpose",
+    "dual_arm": "dual_arm",
 }
 """``bench.json``'s ``step_us`` keys of clik's compiled engine and the line each is the
 median of; ``panda_pose_obstacles`` is the line with one obstacle row active."""
@@ -71,6 +72,7 @@ STEP_US = {
     **{line_name(key, "python"): line_name(line, "python") for key, line in CLIK_STEP_US.items()},
     "pink_panda_pose": "pink_panda_pose",
     "pink_panda_pose_default_limits": "pink_panda_pose_default_limits",
+    "pink_dual_arm": "pink_dual_arm",
 }
 """``bench.json``'s ``step_us`` keys and the step line whose median each is: clik's
 compiled engine, its Python engine's twins (``python_`` keys) and pink. The key

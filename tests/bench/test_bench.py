@@ -23,6 +23,7 @@ HAS_PINK = importlib.util.find_spec("pink") is not None and (
 )
 PINK_KEYS = {
     "step_us.pink_panda_pose",
+    "step_us.pink_dual_arm",
     "solve.pink_median_us",
     "ratios.pink_over_panda_pose",
     "ratios.pink_over_panda_pose_obstacles",
@@ -37,6 +38,7 @@ STEP_LINES = (
     "panda_pose_obstacles_0_active",
     "panda_pose_obstacles_1_active",
     "panda_pose_obstacles_transpose",
+    "dual_arm",
 )
 PYTHON_STEP_LINES = tuple(f"python_{name}" for name in STEP_LINES)
 
@@ -115,6 +117,10 @@ def test_step_lines_have_medians_and_percentiles(quick):
     assert report["steps"]["python_panda_pose_obstacles_0_active"]["active_rows_mean"] == 0.0
     assert report["steps"]["python_panda_pose_obstacles_1_active"]["active_rows_mean"] > 0.5
     assert ("pink_panda_pose" in report["steps"]) == HAS_PINK
+    assert ("pink_dual_arm" in report["steps"]) == HAS_PINK
+    # The dual-arm lines track both hands (the run's largest hand error).
+    assert report["steps"]["dual_arm"]["max_task_error"] <= 1e-5
+    assert report["steps"]["python_dual_arm"]["max_task_error"] <= 1e-5
 
 
 def test_every_clik_line_runs_in_both_engines(quick):
@@ -206,8 +212,10 @@ def test_targets_come_from_the_shipped_toml(quick):
     shipped = load_targets()
     assert [t["name"] for t in report["targets"]] == [t.name for t in shipped]
     assert [t["target"] for t in report["targets"]] == [t.wanted for t in shipped]
-    assert len(shipped) == 11
+    assert len(shipped) == 13
     by_measure = {(t.measure, t.over): t for t in shipped}
+    assert by_measure[("step_us.dual_arm", None)].bound == 6.0
+    assert by_measure[("step_us.pink_dual_arm", "step_us.dual_arm")].bound == 30.0
     assert by_measure[("step_us.planar4r", None)].bound == 1.5
     assert by_measure[("step_us.zoo_obstacle_median", None)].bound == 20.0
     assert by_measure[("step_us.panda_pose", None)].bound == 2.5

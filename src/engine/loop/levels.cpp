@@ -98,6 +98,8 @@ void Law::level_constraints(const ExtendedTask& ext, int v, double scale1) {
   }
 }
 
+// The products of this file are small (at most a few tens of rows and joints): lazy
+// (coefficient-based) products, without the packing of Eigen's general matrix product.
 double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot) {
   const int m = ext.m, v = r - m, nv = ext.nv;
   const int L = static_cast<int>(ends_.size());
@@ -130,8 +132,8 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
     lv.JN = Jl;
     if (nb_ > 0) {
       const auto B = B_.topRows(nb_);
-      lv.T.leftCols(nb_).noalias() = Jl * B.transpose();
-      lv.JN.noalias() -= lv.T.leftCols(nb_) * B;
+      lv.T.leftCols(nb_).noalias() = Jl.lazyProduct(B.transpose());
+      lv.JN.noalias() -= lv.T.leftCols(nb_).lazyProduct(B);
     }
     lv.rest = bl;
     lv.rest.noalias() -= Jl * out_;
@@ -139,7 +141,7 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
     // leaves free is singular for sure: solved in joint space without it)
     bool have_A = false;
     auto gram_A = [&] {
-      if (!have_A) lv.A.noalias() = lv.JN * lv.JN.transpose();
+      if (!have_A) lv.A.noalias() = lv.JN.lazyProduct(lv.JN.transpose());
       have_A = true;
     };
     const bool rank_short = n > nv - nb_;
@@ -198,8 +200,8 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
       // lifts B's directions, which JN^T rest does not reach, to c >= eps^2; when H is
       // regular (every eigenvalue >= eps^2) part = (H + lambda_0^2 I)^-1 JN^T rest.
       const double c = std::max({scale * scale, eps2, 1.0});
-      lv.H.noalias() = lv.JN.transpose() * lv.JN;
-      if (nb_ > 0) lv.H.noalias() += c * (B_.topRows(nb_).transpose() * B_.topRows(nb_));
+      lv.H.noalias() = lv.JN.transpose().lazyProduct(lv.JN);
+      if (nb_ > 0) lv.H.noalias() += c * B_.topRows(nb_).transpose().lazyProduct(B_.topRows(nb_));
       lv.Hs = lv.H;
       lv.Hs.diagonal().array() -= eps2;
       lv.lltv.compute(lv.Hs);
