@@ -9,7 +9,6 @@ import json
 import pytest
 
 from clik.cli import main
-from clik.engine import load
 from clik.scenarios import scenario_path
 from clik.scenarios.runner import build
 from tests.limits_check import assert_completed, assert_summary_within_limits
@@ -59,21 +58,9 @@ def test_solve_prints_one_line_per_task(solved):
 
 def test_the_example_is_within_the_robots_limits():
     run = build(SCENARIO)
-    assert run.tracker.law == "pseudoinverse" and run.tracker.engine == "python"
+    assert run.tracker.law == "pseudoinverse" and run.tracker.engine == "compiled"
     result = run.execute()
     assert_completed(result)
     assert_summary_within_limits(result.summary(), result.robot)
     for hand in HANDS:
         assert result.task_errors[hand]["max"] <= HAND_TOL
-
-
-@pytest.mark.skipif(hasattr(load(), "FrameGoal"), reason="the compiled engine runs several tasks")
-def test_the_example_on_a_compiled_engine_without_tasks_is_a_clean_error(tmp_path, capsys):
-    text = SCENARIO.read_text()
-    assert text.count('engine = "python"') == 1  # the one line to delete
-    compiled = tmp_path / "compiled.toml"
-    compiled.write_text(text.replace('engine = "python"', 'engine = "compiled"'))
-    assert main(["solve", str(compiled), "--out", str(tmp_path / "out")]) == 2
-    err = capsys.readouterr().err
-    assert "solver.engine: expected 'python' for several tasks or objectives" in err
-    assert "Traceback" not in err and not (tmp_path / "out").exists()

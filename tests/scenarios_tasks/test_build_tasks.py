@@ -10,7 +10,6 @@ import pytest
 
 import clik
 from clik import ScenarioError
-from clik.engine import load
 from clik.scenarios.runner import build
 from tests.limits_check import assert_completed
 from tests.scenarios_tasks.scenario_text import (
@@ -170,14 +169,6 @@ def test_a_gain_per_row_of_the_wrong_length_names_the_task(tmp_path):
     with pytest.raises(ScenarioError) as info:
         build(planar(tmp_path, POSTURE.replace("gain = 10.0", "gain = [1.0, 2.0]")))
     assert info.value.key == "tasks[1].gain"
-
-
-@pytest.mark.skipif(hasattr(load(), "FrameGoal"), reason="the compiled engine runs several tasks")
-def test_the_compiled_engine_without_several_tasks_is_a_clean_error(tmp_path):
-    with pytest.raises(ScenarioError) as info:
-        build(planar(tmp_path, POSTURE, solver=SOLVER.replace('engine = "python"\n', "")))
-    assert info.value.key == "solver.engine"
-    assert "'python' for several tasks or objectives" in info.value.expected
 
 
 def test_a_planar_run_with_a_posture_and_an_objective(tmp_path):
