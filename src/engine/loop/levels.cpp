@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "loop/laws.hpp"
 
@@ -30,7 +31,10 @@ Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& 
     level_.back().basis = l + 1 < L;
     start = ends_[l];
   }
-  for (int lz : zlevel_) level_[static_cast<size_t>(lz - 1)].basis = true;
+  for (int lz : zlevel_) {
+    if (lz < 1 || lz > L) throw std::invalid_argument("Law: an objective's level, 1 to L");
+    level_[static_cast<size_t>(lz - 1)].basis = true;
+  }
   z_.assign(zlevel_.size(), Vec::Zero(nv));
   B_.setZero(room, nv);
   parts_.setZero(1 + L, nv);

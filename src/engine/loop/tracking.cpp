@@ -84,7 +84,14 @@ LevelPlan TrackingRun::level_plan(const TaskConfig& task, const LawConfig& law,
         "LawConfig: levels and objectives need law 'pseudoinverse' (laws (9) and (8): one "
         "level, no objective)");
   }
-  for (const ObjectiveConfig& o : law.objectives) plan.objective_levels.push_back(o.level);
+  const int L = static_cast<int>(plan.ends.size());
+  for (const ObjectiveConfig& o : law.objectives) {
+    if (o.level < 1 || o.level > L) {  // checked before the law indexes its levels by it
+      throw std::invalid_argument("ObjectiveConfig: level, the level (1 to " +
+                                  std::to_string(L) + ") below which the objective acts");
+    }
+    plan.objective_levels.push_back(o.level);
+  }
   return plan;
 }
 
