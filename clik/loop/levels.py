@@ -16,9 +16,12 @@ pseudoinverse of :func:`~clik.loop.laws.damped_solve`, each level damped below
 ``CONDITION_RATIO`` of its own largest row norm and held to the step budget
 (:data:`~clik.loop.laws.STEP_BUDGET`), and ``z_o`` the objectives of eq. (5) (a gradient,
 :mod:`clik.objectives`) acting below level ``l_o``. ``N_l`` is kept as an orthonormal
-basis ``B`` of the rows it removes (``N_l z = z - B^T B z``): the constraints' right
-singular vectors, then each level's own directions ``Lambda^{-1/2} V^T (J_l N_{l-1})``
-from the eigenpairs of ``J_l N_{l-1} (J_l N_{l-1})^T`` above the rank tolerance.
+basis ``Z_l`` of the directions it leaves free (``N_l = Z_l Z_l^T``, ``Z_0`` that of
+``C``): a level is solved in those coordinates, ``M = J_l Z_{l-1}``,
+``qdot_l = Z M^T f(M M^T) rest = Z f(M^T M) M^T rest`` from the smaller Gram matrix,
+and ``Z_l = Z_{l-1} W`` with ``W`` the orthogonal complement of the directions the
+level keeps (those of ``M M^T``'s eigenpairs above the tolerances, at most as many as
+the directions still free): docs/method.md, "In the free directions' coordinates".
 
 With one level and no objective this is exactly :func:`~clik.loop.laws.prioritized`
 (one code path is the other's specification: the tracker calls that one then).
@@ -46,16 +49,59 @@ def _scale(J: np.ndarray) -> float:
     return math.sqrt(float(np.max(np.einsum("ij,ij->i", J, J)))) if J.size else 0.0
 
 
-def _level_basis(JN: np.ndarray, scale: float) -> np.ndarray:
-    """Orthonormal rows spanning ``JN``'s row space (its directions above the rank tolerance)."""
-    w, V = np.linalg.eigh(JN.dot(JN.T))
-    keep = w > (RANK_TOLERANCE * max(scale, 1.0)) ** 2
-    return (V[:, keep].T.dot(JN)) / np.sqrt(w[keep])[:, None]
+GRAM_TOLERANCE = 1e-12
+"""A level's direction counts when its eigenvalue of ``JN JN^T`` is above this fraction of
+the level's squared scale too (its largest squared row norm): rounding leaves about
+``1e-16 n |J_l|^2`` on the zero eigenvalues of that product, above the rank tolerance's
+square."""
 
 
-def _project(B: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """``N z = z - B^T B z``: ``z`` with the directions of ``B``'s rows removed."""
-    return z - B.T.dot(B.dot(z)) if B.shape[0] else z.copy()
+def _kept_directions(M: np.ndarray, scale: float) -> np.ndarray:
+    """The directions (k, p) of ``M``'s row space above the tolerances, in Z's coordinates.
+
+    ``M^T V Lambda^{-1/2}`` from the eigenpairs of ``M M^T``, at most k of them (the
+    largest: ``M``'s rank is at most k).
+    """
+    w, V = np.linalg.eigh(M.dot(M.T))  # ascending
+    keep = w > max((RANK_TOLERANCE * max(scale, 1.0)) ** 2, GRAM_TOLERANCE * scale * scale)
+    keep[: max(0, len(w) - M.shape[1])] = False
+    return M.T.dot(V[:, keep]) / np.sqrt(w[keep])
+
+
+def _without(Z: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """What is left free of ``Z`` once ``P``'s columns (k, p, rank p) are removed.
+
+    ``Z W`` with ``W`` (k, k - p) an orthonormal basis of their complement in ``R^k``.
+    """
+    k, p = P.shape
+    if p == 0:
+        return Z
+    if p >= k:
+        return Z[:, :0]
+    Q = np.linalg.qr(P, mode="complete")[0]
+    return Z.dot(Q[:, p:])
+
+
+def _level(Jl: np.ndarray, rest: np.ndarray, Z: np.ndarray, damping: float,
+           basis: bool) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """One level in the free directions ``Z`` (n, k), law (10) on ``M = J_l Z``.
+
+    Returns its part ``Z f(.) M^T rest`` and, for a basis level, the directions left
+    free below it (else ``Z``).
+    """
+    scale = _scale(Jl)
+    epsilon = CONDITION_RATIO * scale
+    M = Jl.dot(Z)
+    if M.shape[0] <= M.shape[1]:
+        x = M.T.dot(damped_solve(M.dot(M.T), rest, epsilon, damping))
+    else:  # more rows than free directions: the k x k Gram matrix
+        x = damped_solve(M.T.dot(M), M.T.dot(rest), epsilon, damping)
+    return Z.dot(x), _without(Z, _kept_directions(M, scale)) if basis else Z
+
+
+def _project(Z: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """``N z = Z Z^T z``: ``z`` in the directions left free."""
+    return Z.dot(Z.T.dot(z))
 
 
 def prioritized_levels(
@@ -101,33 +147,26 @@ def prioritized_levels(
     parts[:] = 0.0
     e1 = ends[0]
     scale1 = _scale(J[:e1])
-    B = np.zeros((0, n))
+    Z = np.eye(n)
     if C.shape[0]:
         epsilon = CONDITION_RATIO * scale1
         U, sv, Vt = np.linalg.svd(C, full_matrices=False)
         gain = sv / (np.maximum(sv * sv, epsilon * epsilon) + damping * damping)
         parts[0] = _within_budget(Vt.T.dot(gain * U.T.dot(b_constraint)), dt)
-        B = Vt[sv > RANK_TOLERANCE * max(scale1, 1.0)]
+        Z = _without(Z, Vt[sv > RANK_TOLERANCE * max(scale1, 1.0)].T)
     out[:] = parts[0]
     blocked = 0.0
     start = 0
     for level, end in enumerate(ends, start=1):
         Jl, bl = J[start:end], b_task[start:end]
-        scale = _scale(Jl)
-        epsilon = CONDITION_RATIO * scale
-        JN = Jl - Jl.dot(B.T).dot(B) if B.shape[0] else Jl
-        rest = bl - Jl.dot(out)
+        mine = [z for lo, z in objectives if lo == level]
         part = parts[level]
-        part[:] = JN.T.dot(damped_solve(JN.dot(JN.T), rest, epsilon, damping))
+        part[:], Z = _level(Jl, bl - Jl.dot(out), Z, damping, bool(mine) or level < len(ends))
         if level == 1 and not budget_blocks:  # measured on the law's own demand
             blocked = _unrealised(Jl, bl, out + part)
         _within_budget(part, dt)
-        last = level == len(ends)
-        mine = [z for lo, z in objectives if lo == level]
-        if mine or not last:
-            B = np.vstack([B, _level_basis(JN, scale)])
         for z in mine:
-            part += _within_budget(_project(B, z), dt)
+            part += _within_budget(_project(Z, z), dt)
         out += part
         if level == 1 and budget_blocks:
             blocked = _unrealised(Jl, bl, out)

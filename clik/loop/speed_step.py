@@ -26,6 +26,11 @@ import numpy as np
 from clik.loop.joint_speed import JointSpeedBounds
 from clik.tasks.extended_task import ExtendedTask
 
+NEGLIGIBLE = 1e-9
+"""(S2) leaves out a part's components below this fraction of its largest: rounding (a
+null-space part's 1e-16 on a joint the levels above hold at its bound would stop the
+whole level); the final clip keeps the box."""
+
 
 class SpeedStep:
     """One run's speed step: the bounds, the previous joint velocity, scratch arrays.
@@ -119,10 +124,11 @@ class SpeedStep:
         """(S2): the largest ``sigma`` in ``[0, 1]`` with ``|u_i + sigma t_i| <= v_i`` for all i.
 
         ``u`` is in the box; a joint moving toward ``+v_i`` has room ``v_i - u_i``, one
-        moving toward ``-v_i`` room ``v_i + u_i``.
+        moving toward ``-v_i`` room ``v_i + u_i``; components of ``t`` below
+        :data:`NEGLIGIBLE` of its largest are left out (rounding).
         """
         sigma = 1.0
-        moving = t != 0.0
+        moving = np.abs(t) > NEGLIGIBLE * float(np.max(np.abs(t), initial=0.0))
         room = np.where(t > 0.0, self.v - u, self.v + u)[moving]
         step = np.abs(t[moving])
         over = step > room

@@ -20,6 +20,8 @@ SHARED = {
     "CONDITION_RATIO": ("clik.loop.laws", "CONDITION_RATIO"),
     "STEP_BUDGET": ("clik.loop.laws", "STEP_BUDGET"),
     "RANK_TOLERANCE": ("clik.loop.laws", "RANK_TOLERANCE"),
+    "GRAM_TOLERANCE": ("clik.loop.levels", "GRAM_TOLERANCE"),
+    "NEGLIGIBLE": ("clik.loop.speed_step", "NEGLIGIBLE"),
     "CONTACT_DISTANCE": ("clik.constraints.obstacle_rows", "CONTACT_DISTANCE"),
     "MIN_WITNESS_GAP": ("clik.constraints.obstacle_rows", "MIN_WITNESS_GAP"),
     "PARALLEL_SINE": ("clik.constraints.cone", "PARALLEL_SINE"),

@@ -8,6 +8,7 @@
 #include "bindings.hpp"
 #include "boundary.hpp"
 #include "loop/laws.hpp"
+#include "loop/speed_step.hpp"
 
 namespace nb = nanobind;
 
@@ -17,6 +18,8 @@ void bind_laws(nb::module_& m) {
   m.attr("CONDITION_RATIO") = CONDITION_RATIO;
   m.attr("STEP_BUDGET") = STEP_BUDGET;
   m.attr("RANK_TOLERANCE") = RANK_TOLERANCE;
+  m.attr("GRAM_TOLERANCE") = GRAM_TOLERANCE;
+  m.attr("NEGLIGIBLE") = NEGLIGIBLE;
   m.def(
       "law_velocity",
       [](const std::string& law, const Mat& J, const Vec& e, const Vec& K, const Vec& ff, int m_rows,

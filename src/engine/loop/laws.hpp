@@ -24,6 +24,10 @@ using EigenMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::Co
 constexpr double STEP_BUDGET = 0.02;
 // A constraint direction counts above this singular value, relative to max(scale, 1).
 constexpr double RANK_TOLERANCE = 1e-9;
+// A level's direction counts when its eigenvalue of JN JN^T is above this fraction of the
+// level's squared scale too: rounding leaves about 1e-16 n |J_l|^2 on the zero ones
+// (clik/loop/levels.py's GRAM_TOLERANCE).
+constexpr double GRAM_TOLERANCE = 1e-12;
 
 struct LawSettings {
   LawKind kind = LawKind::transpose;
@@ -103,22 +107,39 @@ class Law {
   // By levels: one workspace per level, sized once (its rows never change).
   struct Level {
     Level(int n, int nv);
-    Eigen::MatrixXd JN, T, A, S;  // J_l N (n, nv); J_l B^T (n, nv); JN JN^T, its shift (n, n)
-    Eigen::MatrixXd H, Hs;        // JN^T JN + c B^T B, its shift (nv, nv): the joint-space solve
+    Mat M;                 // J_l Z: the level in the free directions' coordinates (n, <= nv)
+    Eigen::MatrixXd A, S;  // M M^T = JN JN^T, a factorisation's copy (n, n)
     Vec rest, y, tmp;
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;   // levels of more rows
     Eigen::SelfAdjointEigenSolver<EigenMat> eig_small;  // levels of at most MAX_EIGEN_ROWS
-    Eigen::LLT<Eigen::MatrixXd> llt, lltv;
-    bool basis = false;  // extends B (a level above another, or with objectives)
+    bool basis = false;  // removes its directions (a level above another, or with objectives)
   };
+  struct Tolerances {
+    double eps2 = 0.0, d2 = 0.0;  // epsilon_l^2, lambda_0^2
+    double kept = 0.0;            // a direction's eigenvalue counts above it
+    double floor = 0.0;           // the regular case's eigenvalues clear it
+  };
+  void solve_level(Level& lv, const double* Jl, double scale, double* part);
+  bool solve_rows(Level& lv, const double* M, const Tolerances& tol);
+  bool solve_columns(Level& lv, const double* M, const Tolerances& tol);
+  int solve_eigenpairs(Level& lv, const double* M, const Tolerances& tol);
+  void times_rows(const double* M, int n, const double* y);
+  void set_free(int q);
+  void remove_directions(int p);
+  bool remove_rows(const double* M, int n, const double* U);
   bool by_levels_ = false;
   std::vector<int> ends_, zlevel_;
   std::vector<Vec> z_;
   std::vector<Level> level_;
-  Eigen::MatrixXd B_;  // orthonormal rows removed so far (nb_ of them)
-  int nb_ = 0;
+  // Z: orthonormal basis (nv, k_) of the directions the levels above leave free (the
+  // null space of the constraints' and the levels' kept rows); the identity at first.
+  Eigen::MatrixXd Z_, Zn_;
+  int k_ = 0;
+  bool z_identity_ = true;
+  Eigen::MatrixXd P_, W_, G_, Gs_;  // directions removed (k, p); their complement; M^T M
+  Vec beta_, tk_;  // Householder factors; a level's x (k)
   Mat parts_;
-  Vec out_, bz_, zp_;
+  Vec out_, zp_;
 };
 
 }  // namespace clik

@@ -1,18 +1,22 @@
 // Law (10) by priority levels with eq. (5)'s objectives: see loop/laws.hpp and
-// clik/loop/levels.py's prioritized_levels (the specification, mirrored operation for
-// operation; the regular cases by Cholesky factorisations instead of eigenpairs).
+// clik/loop/levels.py's prioritized_levels (the specification). The same projectors,
+// computed in the coordinates of an orthonormal basis Z of the directions still free
+// (docs/method.md, "Several tasks", the compiled engine's form): a level of n rows with
+// k free directions costs an n x k product and a min(n, k)-sized solve; the regular
+// cases by Cholesky factorisations (small_dense.hpp), eigenpairs only in the damping band.
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 #include "loop/laws.hpp"
+#include "loop/small_dense.hpp"
 
 namespace clik {
 
 Law::Level::Level(int n, int nv)
-    : JN(n, nv), T(n, nv), A(n, n), S(n, n), H(nv, nv), Hs(nv, nv), rest(n), y(n), tmp(n),
-      eig(n > MAX_EIGEN_ROWS ? n : 0), eig_small(n <= MAX_EIGEN_ROWS ? n : 0), llt(n), lltv(nv) {}
+    : M(n, nv), A(n, n), S(n, n), rest(n), y(n), tmp(n),
+      eig(n > MAX_EIGEN_ROWS ? n : 0), eig_small(n <= MAX_EIGEN_ROWS ? n : 0) {}
 
 Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& plan)
     : Law(settings, rows, nv) {
@@ -22,12 +26,9 @@ Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& 
                (ends_.size() > 1 || m > MAX_TASK_ROWS || !zlevel_.empty());
   if (!by_levels_) return;
   const int L = static_cast<int>(ends_.size());
-  const int room = nv + m;  // B's rows: at most nv in exact arithmetic
   int start = 0;
   for (int l = 0; l < L; ++l) {
-    const int n = ends_[l] - start;
-    level_.emplace_back(n, nv);
-    level_.back().T.resize(n, room);
+    level_.emplace_back(ends_[l] - start, nv);
     level_.back().basis = l + 1 < L;
     start = ends_[l];
   }
@@ -36,19 +37,20 @@ Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& 
     level_[static_cast<size_t>(lz - 1)].basis = true;
   }
   z_.assign(zlevel_.size(), Vec::Zero(nv));
-  B_.setZero(room, nv);
+  Z_.setZero(nv, nv);
+  Zn_.setZero(nv, nv);
+  P_.setZero(nv, nv);
+  W_.setZero(nv, nv);
+  G_.setZero(nv, nv);
+  Gs_.setZero(nv, nv);
+  beta_.setZero(nv);
+  tk_.setZero(nv);
   parts_.setZero(1 + L, nv);
   out_.setZero(nv);
-  bz_.setZero(room);
   zp_.setZero(nv);
 }
 
 namespace {
-
-template <typename Rows>
-double row_scale(const Rows& J) {
-  return J.rows() ? std::sqrt(J.rowwise().squaredNorm().maxCoeff()) : 0.0;
-}
 
 // The step budget on a part (a row of parts_, or a vector).
 template <typename V>
@@ -57,10 +59,96 @@ void budget(V&& qdot, double dt) {
   if (step > STEP_BUDGET) qdot *= STEP_BUDGET / step;
 }
 
+// S = A + shift I (n x n upper triangles, leading dimensions lda, lds), factorised in
+// place: whether it is positive definite.
+bool factor_shifted(const double* A, int lda, int n, double shift, double* S, int lds) {
+  for (int j = 0; j < n; ++j) {
+    std::copy(A + j * lda, A + j * lda + j + 1, S + j * lds);
+    S[j * lds + j] += shift;
+  }
+  return small::cholesky(S, lds, n);
+}
+
+// The largest row norm of n contiguous rows of nv (0 without rows).
+double rows_scale(const double* J, int n, int nv) {
+  double top = 0.0;
+  for (int i = 0; i < n; ++i) top = std::max(top, small::dot(J + i * nv, J + i * nv, nv));
+  return std::sqrt(top);
+}
+
 }  // namespace
 
+// Z <- Z W: the free directions W_'s first q columns (orthonormal, in Z's coordinates)
+// describe.
+void Law::set_free(int q) {
+  const int k = k_, nv = static_cast<int>(Z_.rows());
+  if (z_identity_) {
+    Z_.leftCols(q) = W_.topLeftCorner(k, q);
+  } else {  // Z W, column by column
+    for (int c = 0; c < q; ++c) {
+      double* out = Zn_.data() + c * nv;
+      std::fill(out, out + nv, 0.0);
+      for (int j = 0; j < k; ++j) small::sub_scaled(-W_(j, c), Z_.data() + j * nv, out, nv);
+    }
+    Z_.leftCols(q) = Zn_.leftCols(q);
+  }
+  k_ = q;
+  z_identity_ = false;
+}
+
+// Z loses the directions in P_'s first p columns (k_ x p, of rank p, in Z's
+// coordinates): Householder reflections H_0 ... H_{p-1} take P to upper-triangular
+// form, and their product's last k_ - p columns W span P's orthogonal complement, so
+// Z W (nv, k_ - p) is orthonormal and spans what is left.
+void Law::remove_directions(int p) {
+  const int k = k_, nv = static_cast<int>(Z_.rows());
+  if (p <= 0) return;
+  if (p >= k) {
+    k_ = 0;
+    z_identity_ = false;
+    return;
+  }
+  small::householder_complement(P_.data(), nv, k, p, beta_.data(), W_.data(), nv);
+  set_free(k - p);
+}
+
+// Z loses the row space of M (n x k_ rows of stride nv, rank n < k_), given U, the
+// Cholesky factor of M M^T = U^T U (upper, n x n): Q = U^-T M has orthonormal rows, the
+// projector N = I - Q^T Q on their complement has rank q = k_ - n, and q steps of its
+// pivoted Cholesky factorisation N = F F^T give F (k_ x q) with orthonormal columns
+// (F F^T a projector of rank q: F = W R with W orthonormal and R R^T = I). About
+// n^2 k / 2 + q n k products instead of the Householder reflections' n^2 (k - n / 3).
+// False (nothing changed) when a pivot is not positive: rounding on a nearly singular M.
+bool Law::remove_rows(const double* M, int n, const double* U) {
+  const int k = k_, nv = static_cast<int>(Z_.rows()), q = k - n;
+  for (int i = 0; i < n; ++i) {  // Q's row i at P_ + i * nv: U^T Q = M, row by row
+    double* row = P_.data() + i * nv;
+    std::copy(M + i * nv, M + i * nv + k, row);
+    for (int c = 0; c < i; ++c) small::sub_scaled(U[i * n + c], P_.data() + c * nv, row, k);
+    small::scale(1.0 / U[i * n + i], row, k);
+  }
+  double* d = beta_.data();  // N's diagonal, then what the steps leave of it
+  std::fill(d, d + k, 1.0);
+  for (int i = 0; i < n; ++i) small::sub_squares(P_.data() + i * nv, d, k);
+  for (int s = 0; s < q; ++s) {
+    const int j = static_cast<int>(std::max_element(d, d + k) - d);
+    double* col = W_.data() + s * nv;  // N e_j less the steps before
+    std::fill(col, col + k, 0.0);
+    col[j] = 1.0;
+    for (int i = 0; i < n; ++i) small::sub_scaled(P_(j, i), P_.data() + i * nv, col, k);  // Q(i, j)
+    for (int t = 0; t < s; ++t) small::sub_scaled(W_(j, t), W_.data() + t * nv, col, k);
+    if (!(col[j] > 0.0)) return false;
+    small::scale(1.0 / std::sqrt(col[j]), col, k);
+    small::sub_squares(col, d, k);
+    d[j] = -1.0;  // taken
+  }
+  set_free(q);
+  return true;
+}
+
 // The constraint level on C = J[m:m+v] (v >= 1): parts_[0] = C^# b_c within the budget;
-// B = C's right singular vectors above the rank tolerance (relative to level 1's scale).
+// Z loses C's right singular vectors above the rank tolerance (relative to level 1's
+// scale).
 void Law::level_constraints(const ExtendedTask& ext, int v, double scale1) {
   const int m = ext.m;
   const double epsilon = CONDITION_RATIO * scale1;
@@ -78,8 +166,8 @@ void Law::level_constraints(const ExtendedTask& ext, int v, double scale1) {
     part.noalias() = (gain * b_[m] / s) * c.transpose();
     budget(part, s_.dt);
     if (s > keep) {
-      B_.row(0) = c / s;
-      nb_ = 1;
+      P_.col(0) = c.transpose() / s;
+      remove_directions(1);
     }
     return;
   }
@@ -97,9 +185,141 @@ void Law::level_constraints(const ExtendedTask& ext, int v, double scale1) {
   tmp_.head(k).array() *= gain_.head(k).array();
   part.noalias() = Vm * tmp_.head(k);
   budget(part, s_.dt);
+  int p = 0;
   for (Eigen::Index i = 0; i < k; ++i) {
-    if (sv[i] > keep) B_.row(nb_++) = Vm.col(i).transpose();
+    if (sv[i] > keep) P_.col(p++) = Vm.col(i);
   }
+  remove_directions(p);
+}
+
+// One level of n rows J_l with the demand lv.rest (b_l - J_l qdot above), in the k_
+// free directions: JN = J_l Z Z^T = M Z^T, so JN JN^T = M M^T and
+// JN^T f(JN JN^T) = Z f(M^T M) M^T (f: damped_solve's filter, on the nonzero
+// eigenvalues). part = Z x with x from the smaller of the two Gram matrices when it is
+// regular (every eigenvalue above the filter's floor), from the eigenpairs of M M^T in
+// the damping band. A basis level then removes M's row space from Z.
+void Law::solve_level(Level& lv, const double* Jl, double scale, double* part) {
+  const int n = static_cast<int>(lv.rest.size()), k = k_, nv = static_cast<int>(Z_.rows());
+  if (k == 0) {  // nothing left to move: JN = 0
+    std::fill(part, part + nv, 0.0);
+    return;
+  }
+  Tolerances tol;
+  tol.eps2 = std::pow(CONDITION_RATIO * scale, 2);
+  tol.d2 = s_.damping * s_.damping;
+  const double keep = RANK_TOLERANCE * std::max(scale, 1.0);
+  tol.kept = std::max(keep * keep, GRAM_TOLERANCE * scale * scale);
+  // a basis level keeps every direction when the floor clears its tolerance too
+  tol.floor = lv.basis ? std::max(tol.eps2, tol.kept) : tol.eps2;
+  // M = J_l Z, row i at M + i * nv (J_l itself while Z is the identity)
+  const double* M = Jl;
+  if (!z_identity_) {
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < k; ++j) lv.M(i, j) = small::dot(Jl + i * nv, Z_.data() + j * nv, nv);
+    }
+    M = lv.M.data();
+  }
+  const bool rows = n <= k && solve_rows(lv, M, tol);
+  int p = n <= k ? n : k;  // the regular case keeps every direction
+  if (!rows && !(n > k && solve_columns(lv, M, tol))) p = solve_eigenpairs(lv, M, tol);
+  const double* x = tk_.data();
+  if (z_identity_) {  // part = Z x
+    std::copy(x, x + k, part);
+  } else {
+    std::fill(part, part + nv, 0.0);
+    for (int j = 0; j < k; ++j) small::sub_scaled(-x[j], Z_.data() + j * nv, part, nv);
+  }
+  if (!lv.basis) return;
+  if (rows) {  // U = chol(M M^T): lv.S's factor when undamped
+    if (tol.d2 > 0.0) factor_shifted(lv.A.data(), n, n, 0.0, lv.S.data(), n);
+    if (remove_rows(M, n, lv.S.data())) return;
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < k; ++j) P_(j, i) = M[i * nv + j];
+    }
+  }
+  remove_directions(p);
+}
+
+// x = M^T y (k_) into tk_.
+void Law::times_rows(const double* M, int n, const double* y) {
+  const int k = k_, nv = static_cast<int>(Z_.rows());
+  double* x = tk_.data();
+  std::fill(x, x + k, 0.0);
+  for (int i = 0; i < n; ++i) small::sub_scaled(-y[i], M + i * nv, x, k);
+}
+
+// n <= k: x = M^T (M M^T + lambda_0^2 I)^-1 rest when M M^T's eigenvalues clear the floor
+// (its Cholesky factorisation less floor I exists); lv.S keeps the solve's factor.
+bool Law::solve_rows(Level& lv, const double* M, const Tolerances& tol) {
+  const int n = static_cast<int>(lv.rest.size()), nv = static_cast<int>(Z_.rows());
+  small::gram_rows(M, nv, n, k_, lv.A.data(), n);
+  if (!factor_shifted(lv.A.data(), n, n, -tol.floor, lv.S.data(), n) ||
+      !factor_shifted(lv.A.data(), n, n, tol.d2, lv.S.data(), n)) {
+    return false;
+  }
+  lv.y = lv.rest;
+  small::cholesky_solve(lv.S.data(), n, n, lv.y.data());
+  times_rows(M, n, lv.y.data());
+  return true;
+}
+
+// n > k: x = (M^T M + lambda_0^2 I)^-1 M^T rest when M^T M's (k x k) eigenvalues clear the
+// floor: JN JN^T's nonzero eigenvalues are M^T M's.
+bool Law::solve_columns(Level& lv, const double* M, const Tolerances& tol) {
+  const int n = static_cast<int>(lv.rest.size()), k = k_, nv = static_cast<int>(Z_.rows());
+  G_.topLeftCorner(k, k).setZero();
+  for (int i = 0; i < n; ++i) {
+    const double* row = M + i * nv;
+    for (int j = 0; j < k; ++j) small::sub_scaled(-row[j], row, G_.data() + j * nv, k);
+  }
+  if (!factor_shifted(G_.data(), nv, k, -tol.floor, Gs_.data(), nv) ||
+      !factor_shifted(G_.data(), nv, k, tol.d2, Gs_.data(), nv)) {
+    return false;
+  }
+  times_rows(M, n, lv.rest.data());
+  small::cholesky_solve(Gs_.data(), nv, k, tk_.data());
+  return true;
+}
+
+// The damping band (or a basis level not regular): x from the eigenpairs of M M^T; for a
+// basis level, P_ gets JN's row space above the tolerances, M^T V diag(1 / sqrt(w))
+// (orthonormal), at most k directions, the largest (w ascends). Returns their count.
+int Law::solve_eigenpairs(Level& lv, const double* M, const Tolerances& tol) {
+  const int n = static_cast<int>(lv.rest.size()), k = k_, nv = static_cast<int>(Z_.rows());
+  small::gram_rows(M, nv, n, k, lv.A.data(), n);
+  int p = 0;
+  auto by_eigenpairs = [&](auto& eig) {
+    eig.compute(lv.A);
+    const auto& V = eig.eigenvectors();
+    const auto& w = eig.eigenvalues();
+    for (int i = 0; i < n; ++i) {
+      const double wi = std::max(w[i], tol.eps2) + tol.d2;
+      lv.tmp[i] = wi > 0.0 ? wi : std::numeric_limits<double>::infinity();
+    }
+    lv.y.noalias() = V.transpose() * lv.rest;
+    lv.y.array() /= lv.tmp.array();
+    lv.tmp.noalias() = V * lv.y;
+    times_rows(M, n, lv.tmp.data());
+    if (!lv.basis) return;
+    for (int i = n - 1; i >= 0; --i) {
+      if (w[i] > tol.kept && p < k) {
+        auto col = P_.col(p).head(k);
+        col.setZero();
+        for (int r = 0; r < n; ++r) {
+          small::sub_scaled(-V(r, i) / std::sqrt(w[i]), M + r * nv, col.data(), k);
+        }
+        ++p;
+      }
+    }
+  };
+  // A fixed-capacity solver allocates nothing (Eigen's dynamic one allocates a
+  // workspace in each tridiagonalisation).
+  if (n <= MAX_EIGEN_ROWS) {
+    by_eigenpairs(lv.eig_small);
+  } else {
+    by_eigenpairs(lv.eig);
+  }
+  return p;
 }
 
 // The products of this file are small (at most a few tens of rows and joints): lazy
@@ -108,8 +328,8 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
   const int m = ext.m, v = r - m, nv = ext.nv;
   const int L = static_cast<int>(ends_.size());
   ext.demand(r, b_);
-  bool finite = ext.J.topRows(r).allFinite() && b_.head(r).allFinite();
-  for (const Vec& z : z_) finite = finite && z.allFinite();
+  bool finite = small::all_finite(ext.J.data(), r * nv) && small::all_finite(b_.data(), r);
+  for (const Vec& z : z_) finite = finite && small::all_finite(z.data(), nv);
   if (!finite) {
     qdot.setConstant(std::numeric_limits<double>::quiet_NaN());
     parts_.setConstant(std::numeric_limits<double>::quiet_NaN());
@@ -117,154 +337,40 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
     return 0.0;
   }
   parts_.setZero();
-  nb_ = 0;
+  k_ = nv;
+  z_identity_ = true;
   const int e1 = ends_[0];
-  const double scale1 = row_scale(ext.J.topRows(e1));
+  const double scale1 = rows_scale(ext.J.data(), e1, nv);
   if (v > 0) level_constraints(ext, v, scale1);
   out_ = parts_.row(0).transpose();
   double blocked = 0.0;
-  const double d2 = s_.damping * s_.damping;
   int start = 0;
   for (int l = 0; l < L; ++l) {
     Level& lv = level_[static_cast<size_t>(l)];
     const int n = ends_[l] - start;
     const auto Jl = ext.J.middleRows(start, n);
-    const auto bl = b_.segment(start, n);
-    const double scale = row_scale(Jl);
-    const double epsilon = CONDITION_RATIO * scale, eps2 = epsilon * epsilon;
-    // JN = J_l - (J_l B^T) B
-    lv.JN = Jl;
-    if (nb_ > 0) {
-      const auto B = B_.topRows(nb_);
-      lv.T.leftCols(nb_).noalias() = Jl.lazyProduct(B.transpose());
-      lv.JN.noalias() -= lv.T.leftCols(nb_).lazyProduct(B);
-    }
-    lv.rest = bl;
-    lv.rest.noalias() -= Jl * out_;
-    // JN JN^T, computed when a solve needs it (a level of more rows than the joints B
-    // leaves free is singular for sure: solved in joint space without it)
-    bool have_A = false;
-    auto gram_A = [&] {
-      if (!have_A) lv.A.noalias() = lv.JN.lazyProduct(lv.JN.transpose());
-      have_A = true;
-    };
-    const bool rank_short = n > nv - nb_;
-    // y = V diag(1 / (max(w_i, eps^2) + lambda_0^2)) V^T rest (damped_solve)
-    bool solved = false, based = false;
-    const double keep = RANK_TOLERANCE * std::max(scale, 1.0);
-    if (lv.basis) {
-      gram_A();
-      // Regular case: A - max(eps^2, tol^2) I positive definite, so no eigenvalue is
-      // filtered and every direction is kept; with A = L L^T the rows L^-1 JN are an
-      // orthonormal basis of JN's row space (L^-1 A L^-T = I): the same projector as
-      // the eigenvectors' diag(1 / sqrt(w)) V^T JN, without an eigensolver.
-      lv.S = lv.A;
-      lv.S.diagonal().array() -= std::max(eps2, keep * keep);
-      lv.llt.compute(lv.S);
-      if (lv.llt.info() == Eigen::Success) {
-        lv.S = lv.A;
-        lv.llt.compute(lv.S);
-        if (lv.llt.info() == Eigen::Success && nb_ + n <= B_.rows()) {
-          auto rows = B_.middleRows(nb_, n);
-          rows = lv.JN;
-          lv.llt.matrixL().solveInPlace(rows);
-          if (d2 > 0.0) {
-            lv.S.diagonal().array() += d2;
-            lv.llt.compute(lv.S);
-          }
-          if (lv.llt.info() == Eigen::Success) {
-            lv.y = lv.rest;
-            lv.llt.solveInPlace(lv.y);
-            solved = based = true;
-          }
-        }
-      }
-    } else if (!rank_short) {  // regular case: two Cholesky factorisations, no eigensolver
-      gram_A();
-      lv.S = lv.A;
-      lv.S.diagonal().array() -= eps2;
-      lv.llt.compute(lv.S);
-      if (lv.llt.info() == Eigen::Success) {
-        lv.S = lv.A;
-        lv.S.diagonal().array() += d2;
-        lv.llt.compute(lv.S);
-        if (lv.llt.info() == Eigen::Success) {
-          lv.y = lv.rest;
-          lv.llt.solveInPlace(lv.y);
-          solved = true;
-        }
-      }
+    for (int i = 0; i < n; ++i) {
+      lv.rest[i] = b_[start + i] - small::dot(Jl.row(i).data(), out_.data(), nv);
     }
     Eigen::Map<Vec> part(parts_.row(1 + l).data(), nv);
-    bool direct = false;  // part written in joint space
-    if (!solved && !lv.basis) {
-      // JN JN^T singular (JN's rows in B's null space, or more rows than joints): in joint
-      // space, JN^T f(JN JN^T) = f(JN^T JN) JN^T (f the filter of damped_solve, on the
-      // nonzero eigenvalues; the zero ones give nothing either way). H = JN^T JN + c B^T B
-      // lifts B's directions, which JN^T rest does not reach, to c >= eps^2; when H is
-      // regular (every eigenvalue >= eps^2) part = (H + lambda_0^2 I)^-1 JN^T rest.
-      const double c = std::max({scale * scale, eps2, 1.0});
-      lv.H.noalias() = lv.JN.transpose().lazyProduct(lv.JN);
-      if (nb_ > 0) lv.H.noalias() += c * B_.topRows(nb_).transpose().lazyProduct(B_.topRows(nb_));
-      lv.Hs = lv.H;
-      lv.Hs.diagonal().array() -= eps2;
-      lv.lltv.compute(lv.Hs);
-      if (lv.lltv.info() == Eigen::Success) {
-        lv.Hs = lv.H;
-        lv.Hs.diagonal().array() += d2;
-        lv.lltv.compute(lv.Hs);
-        if (lv.lltv.info() == Eigen::Success) {
-          part.noalias() = lv.JN.transpose() * lv.rest;
-          lv.lltv.solveInPlace(part);
-          solved = direct = true;
-        }
-      }
-    }
-    if (!solved) {  // the eigenpairs of JN JN^T (damping band, or a basis level not regular)
-      gram_A();
-      auto by_eigenpairs = [&](auto& eig) {
-        eig.compute(lv.A);
-        const auto& V = eig.eigenvectors();
-        const auto& w = eig.eigenvalues();
-        for (int i = 0; i < n; ++i) {
-          const double wi = std::max(w[i], eps2) + d2;
-          lv.tmp[i] = wi > 0.0 ? wi : std::numeric_limits<double>::infinity();
-        }
-        lv.y.noalias() = V.transpose() * lv.rest;
-        lv.y.array() /= lv.tmp.array();
-        lv.tmp.noalias() = V * lv.y;
-        lv.y = lv.tmp;
-        if (!lv.basis) return;
-        // B gains JN's row space: diag(1 / sqrt(w)) V^T JN above the tolerance
-        for (int i = 0; i < n; ++i) {
-          if (w[i] > keep * keep && nb_ < B_.rows()) {
-            B_.row(nb_).noalias() = V.col(i).transpose() * lv.JN;
-            B_.row(nb_) /= std::sqrt(w[i]);
-            ++nb_;
-          }
-        }
-      };
-      // A fixed-capacity solver allocates nothing (Eigen's dynamic one allocates a
-      // workspace in each tridiagonalisation).
-      if (n <= MAX_EIGEN_ROWS) {
-        by_eigenpairs(lv.eig_small);
-      } else {
-        by_eigenpairs(lv.eig);
-      }
-    }
-    if (!direct) part.noalias() = lv.JN.transpose() * lv.y;
+    solve_level(lv, Jl.data(), rows_scale(Jl.data(), n, nv), part.data());
     if (l == 0 && !s_.budget_blocks) {  // measured on the law's own demand
       zp_ = out_ + part;
       blocked = unrealised_rows(ext, 0, e1, zp_);
     }
     budget(part, s_.dt);
-    if (based) nb_ += n;  // the rows L^-1 JN written above
-    for (size_t o = 0; o < zlevel_.size(); ++o) {  // N z = z - B^T B z, within the budget
+    for (size_t o = 0; o < zlevel_.size(); ++o) {  // N z = Z Z^T z, within the budget
       if (zlevel_[o] != l + 1) continue;
-      zp_ = z_[o];
-      if (nb_ > 0) {
-        bz_.head(nb_).noalias() = B_.topRows(nb_) * z_[o];
-        zp_.noalias() -= B_.topRows(nb_).transpose() * bz_.head(nb_);
+      if (z_identity_) {
+        zp_ = z_[o];
+      } else if (k_ == 0) {
+        zp_.setZero();
+      } else {
+        zp_.setZero();
+        for (int j = 0; j < k_; ++j) {
+          const double* zc = Z_.data() + j * nv;
+          small::sub_scaled(-small::dot(zc, z_[o].data(), nv), zc, zp_.data(), nv);
+        }
       }
       budget(zp_, s_.dt);
       part += zp_;

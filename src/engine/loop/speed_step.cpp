@@ -39,8 +39,9 @@ double SpeedStep::box_scale(const Vec& c) const {
 double SpeedStep::fit(const Vec& u, const Vec& t) const {
   double s = 1.0;
   bool any = false;
+  const double negligible = NEGLIGIBLE * (t.size() ? t.cwiseAbs().maxCoeff() : 0.0);
   for (Eigen::Index i = 0; i < t.size(); ++i) {
-    if (t[i] == 0.0) continue;
+    if (!(std::abs(t[i]) > negligible)) continue;
     const double room = t[i] > 0.0 ? v_[i] - u[i] : v_[i] + u[i];
     const double step = std::abs(t[i]);
     if (step > room) {

@@ -11,6 +11,11 @@ namespace clik {
 // The bounds of one run (`_engine.LawConfig`'s vmax, amax): velocity v_i [rad/s or
 // m/s] finite > 0 per coordinate, or empty (no speed step); acceleration a_i
 // [rad/s^2 or m/s^2] > 0 (inf: none) per coordinate, or empty (none at all).
+// (S2) leaves out a part's components below this fraction of its largest: rounding (a
+// null-space part's 1e-16 on a joint held at its bound would stop the whole level); the
+// final clip keeps the box (clik/loop/speed_step.py's NEGLIGIBLE).
+constexpr double NEGLIGIBLE = 1e-9;
+
 struct SpeedBounds {
   Vec velocity;
   Vec acceleration;
