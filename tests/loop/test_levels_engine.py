@@ -49,30 +49,72 @@ def random_stack(rng):
     return J, b, ends, C, bc, objectives
 
 
+def branch_stack(rng):
+    """A random stack whose rows touch only some joints, as tasks on a tree's branches do.
+
+    Each row is zero outside a window of joints (two hands: disjoint windows; a posture
+    row: one joint), a row may be zero, and a row may nearly repeat another's (a level
+    near the damping band: the regularity bound inconclusive).
+    """
+    J, b, ends, C, bc, objectives = random_stack(rng)
+    m, n = J.shape
+    split = int(rng.integers(1, n))
+    for i in range(m):
+        kind = rng.random()
+        if kind < 0.4:  # the first or the second branch
+            lo, hi = (0, split) if rng.random() < 0.5 else (split, n)
+        elif kind < 0.6:  # one joint
+            lo = int(rng.integers(0, n))
+            hi = lo + 1
+        elif kind < 0.65:
+            lo = hi = 0
+        else:
+            lo, hi = 0, n
+        J[i, :lo] = 0.0
+        J[i, hi:] = 0.0
+    if m > 1 and rng.random() < 0.3:  # a row within 1e-3 of another's direction
+        i, j = rng.choice(m, size=2, replace=False)
+        J[i] = J[j] + 1e-3 * rng.normal(size=n) * (J[j] != 0.0)
+    return J, b, ends, C, bc, objectives
+
+
+def assert_engines_agree(levels, stack, rng):
+    """The engine's joint velocity, parts and unrealised fraction against the spec's."""
+    J, b, ends, C, bc, objectives = stack
+    damping = float(rng.choice([0.0, 0.01]))
+    budget_blocks = bool(rng.random() < 0.7)
+    out = np.zeros(J.shape[1])
+    parts = np.zeros((1 + len(ends), J.shape[1]))
+    blocked = levels.prioritized_levels(
+        J, b, ends, C, bc, out, damping, 1e-3, parts, objectives, budget_blocks
+    )
+    qdot, engine_parts, engine_blocked = E.levels_velocity(
+        J, b, ends, C, bc, damping, 1e-3, objectives, budget_blocks
+    )
+    scale = max(1.0, float(np.abs(out).max()))
+    np.testing.assert_allclose(qdot, out, rtol=0, atol=LEVELS_TOLERANCE * scale)
+    if engine_parts.size:  # the run's by-levels path (else law (10)'s one-level path)
+        np.testing.assert_allclose(engine_parts, parts, rtol=0, atol=LEVELS_TOLERANCE * scale)
+    # the fraction |b_1 - J_1 qdot| / |b_1|: rounding of J_1 qdot relative to |b_1|
+    demand = float(np.linalg.norm(b[: ends[0]]))
+    relative = np.abs(J[: ends[0]]).sum(axis=1).max() * scale / demand if demand else 1.0
+    tolerance = LEVELS_TOLERANCE * max(1.0, relative)
+    assert engine_blocked == pytest.approx(blocked, abs=tolerance)
+
+
 def test_levels_velocity_is_prioritized_levels():
     levels = pytest.importorskip("clik.loop.levels")
     rng = np.random.default_rng(24)
     for _ in range(500):
-        J, b, ends, C, bc, objectives = random_stack(rng)
-        damping = float(rng.choice([0.0, 0.01]))
-        budget_blocks = bool(rng.random() < 0.7)
-        out = np.zeros(J.shape[1])
-        parts = np.zeros((1 + len(ends), J.shape[1]))
-        blocked = levels.prioritized_levels(
-            J, b, ends, C, bc, out, damping, 1e-3, parts, objectives, budget_blocks
-        )
-        qdot, engine_parts, engine_blocked = E.levels_velocity(
-            J, b, ends, C, bc, damping, 1e-3, objectives, budget_blocks
-        )
-        scale = max(1.0, float(np.abs(out).max()))
-        np.testing.assert_allclose(qdot, out, rtol=0, atol=LEVELS_TOLERANCE * scale)
-        if engine_parts.size:  # the run's by-levels path (else law (10)'s one-level path)
-            np.testing.assert_allclose(engine_parts, parts, rtol=0, atol=LEVELS_TOLERANCE * scale)
-        # the fraction |b_1 - J_1 qdot| / |b_1|: rounding of J_1 qdot relative to |b_1|
-        demand = float(np.linalg.norm(b[: ends[0]]))
-        relative = np.abs(J[: ends[0]]).sum(axis=1).max() * scale / demand if demand else 1.0
-        tolerance = LEVELS_TOLERANCE * max(1.0, relative)
-        assert engine_blocked == pytest.approx(blocked, abs=tolerance)
+        assert_engines_agree(levels, random_stack(rng), rng)
+
+
+def test_levels_velocity_on_branches_is_prioritized_levels():
+    """Rows with zero blocks: the engine's sums over where rows may be nonzero."""
+    levels = pytest.importorskip("clik.loop.levels")
+    rng = np.random.default_rng(2024)
+    for _ in range(800):
+        assert_engines_agree(levels, branch_stack(rng), rng)
 
 
 def test_levels_velocity_refuses_bad_stacks():

@@ -109,7 +109,8 @@ class Law {
     Level(int n, int nv);
     Mat M;                 // J_l Z: the level in the free directions' coordinates (n, <= nv)
     Eigen::MatrixXd A, S;  // M M^T = JN JN^T, a factorisation's copy (n, n)
-    Vec rest, y, tmp;
+    Vec rest, y, tmp, work;  // work: the eigenvalue bound's (2 max(n, nv))
+    std::vector<int> lo, hi;  // where each row of M may not be zero: [lo, hi)
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;   // levels of more rows
     Eigen::SelfAdjointEigenSolver<EigenMat> eig_small;  // levels of at most MAX_EIGEN_ROWS
     bool basis = false;  // removes its directions (a level above another, or with objectives)
@@ -118,6 +119,7 @@ class Law {
     double eps2 = 0.0, d2 = 0.0;  // epsilon_l^2, lambda_0^2
     double kept = 0.0;            // a direction's eigenvalue counts above it
     double floor = 0.0;           // the regular case's eigenvalues clear it
+    double top = 0.0;             // bounds the Gram matrix's diagonal (scale^2)
   };
   void solve_level(Level& lv, const double* Jl, double scale, double* part);
   bool solve_rows(Level& lv, const double* M, const Tolerances& tol);
@@ -126,7 +128,9 @@ class Law {
   void times_rows(const double* M, int n, const double* y);
   void set_free(int q);
   void remove_directions(int p);
-  bool remove_rows(const double* M, int n, const double* U);
+  bool remove_rows(const double* M, int n, const double* L, const int* lo, const int* hi);
+  bool orthonormal_rows(const double* M, int n, const int* lo, const int* hi, double* L);
+  bool q_ready_ = false;  // solve_rows left the level's Q in P_ (remove_rows uses it)
   bool by_levels_ = false;
   std::vector<int> ends_, zlevel_;
   std::vector<Vec> z_;
@@ -140,6 +144,8 @@ class Law {
   Vec beta_, tk_;  // Householder factors; a level's x (k)
   Mat parts_;
   Vec out_, zp_;
+  Vec lscale_;  // each level's scale (its largest row norm)
+  std::vector<int> span_;  // remove_rows: where each row of Q may not be zero
 };
 
 }  // namespace clik

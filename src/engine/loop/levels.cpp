@@ -15,7 +15,7 @@
 namespace clik {
 
 Law::Level::Level(int n, int nv)
-    : M(n, nv), A(n, n), S(n, n), rest(n), y(n), tmp(n),
+    : M(n, nv), A(n, n), S(n, n), rest(n), y(n), tmp(n), work(2 * std::max(n, nv)), lo(n), hi(n),
       eig(n > MAX_EIGEN_ROWS ? n : 0), eig_small(n <= MAX_EIGEN_ROWS ? n : 0) {}
 
 Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& plan)
@@ -48,6 +48,8 @@ Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& 
   parts_.setZero(1 + L, nv);
   out_.setZero(nv);
   zp_.setZero(nv);
+  lscale_.setZero(L);
+  span_.assign(2 * static_cast<size_t>(nv), 0);
 }
 
 namespace {
@@ -59,92 +61,55 @@ void budget(V&& qdot, double dt) {
   if (step > STEP_BUDGET) qdot *= STEP_BUDGET / step;
 }
 
-// S = A + shift I (n x n upper triangles, leading dimensions lda, lds), factorised in
-// place: whether it is positive definite.
+// S = A + shift I (n x n lower triangles, leading dimensions lda, lds), factorised in
+// place (S = L, L L^T): whether it is positive definite.
 bool factor_shifted(const double* A, int lda, int n, double shift, double* S, int lds) {
   for (int j = 0; j < n; ++j) {
-    std::copy(A + j * lda, A + j * lda + j + 1, S + j * lds);
+    std::copy(A + j * lda + j, A + j * lda + n, S + j * lds + j);
     S[j * lds + j] += shift;
   }
   return small::cholesky(S, lds, n);
 }
 
-// The largest row norm of n contiguous rows of nv (0 without rows).
-double rows_scale(const double* J, int n, int nv) {
+// Whether L L^T - d2 I (L lower, n x n, from a factorisation of a matrix whose diagonal
+// is at most top) shows every eigenvalue above the floor by small::eigen_lower_bound,
+// less d2 and the factorisation's rounding, (n + 1) n eps top (Higham 2002, thm. 10.3).
+// False is inconclusive. work holds 2 n.
+bool bound_clears(const double* L, int ld, int n, double top, double floor, double d2,
+                  double* work) {
+  const double rounding = 2.0 * (n + 1) * n * std::numeric_limits<double>::epsilon() * top;
+  return n > 4 && small::eigen_lower_bound(L, ld, n, work) - d2 - rounding > floor;
+}
+
+// S = the factor of A + d2 I (lower, S S^T) when A's eigenvalues are above the floor
+// (and A + d2 I positive definite); false otherwise. The floor is shown cleared by the
+// factor's own eigenvalue bound in the regular case; only when that bound is
+// inconclusive (or n <= 4, where a factorisation costs less than the bound) is
+// A - floor I factorised too. work holds 2 n.
+bool factor_regular(const double* A, int lda, int n, double floor, double d2, double* S,
+                    int lds, double* work) {
+  if (!factor_shifted(A, lda, n, d2, S, lds)) return false;
   double top = 0.0;
-  for (int i = 0; i < n; ++i) top = std::max(top, small::dot(J + i * nv, J + i * nv, nv));
+  for (int j = 0; j < n; ++j) top = std::max(top, A[j * lda + j] + d2);
+  if (bound_clears(S, lds, n, top, floor, d2, work)) return true;
+  return factor_shifted(A, lda, n, -floor, S, lds) && factor_shifted(A, lda, n, d2, S, lds);
+}
+
+// The largest row norm of n contiguous rows of nv (0 without rows); into finite, whether
+// every row's squared norm is finite (false for a NaN or an infinite entry, or an entry
+// beyond 1e154 whose square overflows).
+double rows_scale(const double* J, int n, int nv, bool& finite) {
+  double top = 0.0, zero = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double s = small::dot(J + i * nv, J + i * nv, nv);
+    top = std::max(top, s);
+    zero += s * 0.0;  // NaN once a sum is NaN or infinite
+  }
+  finite = finite && zero == 0.0;
   return std::sqrt(top);
 }
 
 }  // namespace
-
-// Z <- Z W: the free directions W_'s first q columns (orthonormal, in Z's coordinates)
-// describe.
-void Law::set_free(int q) {
-  const int k = k_, nv = static_cast<int>(Z_.rows());
-  if (z_identity_) {
-    Z_.leftCols(q) = W_.topLeftCorner(k, q);
-  } else {  // Z W, column by column
-    for (int c = 0; c < q; ++c) {
-      double* out = Zn_.data() + c * nv;
-      std::fill(out, out + nv, 0.0);
-      for (int j = 0; j < k; ++j) small::sub_scaled(-W_(j, c), Z_.data() + j * nv, out, nv);
-    }
-    Z_.leftCols(q) = Zn_.leftCols(q);
-  }
-  k_ = q;
-  z_identity_ = false;
-}
-
-// Z loses the directions in P_'s first p columns (k_ x p, of rank p, in Z's
-// coordinates): Householder reflections H_0 ... H_{p-1} take P to upper-triangular
-// form, and their product's last k_ - p columns W span P's orthogonal complement, so
-// Z W (nv, k_ - p) is orthonormal and spans what is left.
-void Law::remove_directions(int p) {
-  const int k = k_, nv = static_cast<int>(Z_.rows());
-  if (p <= 0) return;
-  if (p >= k) {
-    k_ = 0;
-    z_identity_ = false;
-    return;
-  }
-  small::householder_complement(P_.data(), nv, k, p, beta_.data(), W_.data(), nv);
-  set_free(k - p);
-}
-
-// Z loses the row space of M (n x k_ rows of stride nv, rank n < k_), given U, the
-// Cholesky factor of M M^T = U^T U (upper, n x n): Q = U^-T M has orthonormal rows, the
-// projector N = I - Q^T Q on their complement has rank q = k_ - n, and q steps of its
-// pivoted Cholesky factorisation N = F F^T give F (k_ x q) with orthonormal columns
-// (F F^T a projector of rank q: F = W R with W orthonormal and R R^T = I). About
-// n^2 k / 2 + q n k products instead of the Householder reflections' n^2 (k - n / 3).
-// False (nothing changed) when a pivot is not positive: rounding on a nearly singular M.
-bool Law::remove_rows(const double* M, int n, const double* U) {
-  const int k = k_, nv = static_cast<int>(Z_.rows()), q = k - n;
-  for (int i = 0; i < n; ++i) {  // Q's row i at P_ + i * nv: U^T Q = M, row by row
-    double* row = P_.data() + i * nv;
-    std::copy(M + i * nv, M + i * nv + k, row);
-    for (int c = 0; c < i; ++c) small::sub_scaled(U[i * n + c], P_.data() + c * nv, row, k);
-    small::scale(1.0 / U[i * n + i], row, k);
-  }
-  double* d = beta_.data();  // N's diagonal, then what the steps leave of it
-  std::fill(d, d + k, 1.0);
-  for (int i = 0; i < n; ++i) small::sub_squares(P_.data() + i * nv, d, k);
-  for (int s = 0; s < q; ++s) {
-    const int j = static_cast<int>(std::max_element(d, d + k) - d);
-    double* col = W_.data() + s * nv;  // N e_j less the steps before
-    std::fill(col, col + k, 0.0);
-    col[j] = 1.0;
-    for (int i = 0; i < n; ++i) small::sub_scaled(P_(j, i), P_.data() + i * nv, col, k);  // Q(i, j)
-    for (int t = 0; t < s; ++t) small::sub_scaled(W_(j, t), W_.data() + t * nv, col, k);
-    if (!(col[j] > 0.0)) return false;
-    small::scale(1.0 / std::sqrt(col[j]), col, k);
-    small::sub_squares(col, d, k);
-    d[j] = -1.0;  // taken
-  }
-  set_free(q);
-  return true;
-}
 
 // The constraint level on C = J[m:m+v] (v >= 1): parts_[0] = C^# b_c within the budget;
 // Z loses C's right singular vectors above the rank tolerance (relative to level 1's
@@ -211,12 +176,11 @@ void Law::solve_level(Level& lv, const double* Jl, double scale, double* part) {
   tol.kept = std::max(keep * keep, GRAM_TOLERANCE * scale * scale);
   // a basis level keeps every direction when the floor clears its tolerance too
   tol.floor = lv.basis ? std::max(tol.eps2, tol.kept) : tol.eps2;
+  tol.top = scale * scale;  // M M^T's diagonal: |J_l Z row|^2 <= scale^2
   // M = J_l Z, row i at M + i * nv (J_l itself while Z is the identity)
   const double* M = Jl;
   if (!z_identity_) {
-    for (int i = 0; i < n; ++i) {
-      for (int j = 0; j < k; ++j) lv.M(i, j) = small::dot(Jl + i * nv, Z_.data() + j * nv, nv);
-    }
+    small::row_dots(Jl, nv, n, Z_.data(), nv, k, nv, lv.M.data(), nv, false);
     M = lv.M.data();
   }
   const bool rows = n <= k && solve_rows(lv, M, tol);
@@ -226,13 +190,12 @@ void Law::solve_level(Level& lv, const double* Jl, double scale, double* part) {
   if (z_identity_) {  // part = Z x
     std::copy(x, x + k, part);
   } else {
-    std::fill(part, part + nv, 0.0);
-    for (int j = 0; j < k; ++j) small::sub_scaled(-x[j], Z_.data() + j * nv, part, nv);
+    small::combine_rows(x, Z_.data(), nv, k, part, nv);
   }
   if (!lv.basis) return;
-  if (rows) {  // U = chol(M M^T): lv.S's factor when undamped
+  if (rows) {  // L = chol(M M^T): lv.S's factor when undamped
     if (tol.d2 > 0.0) factor_shifted(lv.A.data(), n, n, 0.0, lv.S.data(), n);
-    if (remove_rows(M, n, lv.S.data())) return;
+    if (remove_rows(M, n, lv.S.data(), lv.lo.data(), lv.hi.data())) return;
     for (int i = 0; i < n; ++i) {
       for (int j = 0; j < k; ++j) P_(j, i) = M[i * nv + j];
     }
@@ -244,22 +207,41 @@ void Law::solve_level(Level& lv, const double* Jl, double scale, double* part) {
 void Law::times_rows(const double* M, int n, const double* y) {
   const int k = k_, nv = static_cast<int>(Z_.rows());
   double* x = tk_.data();
-  std::fill(x, x + k, 0.0);
-  for (int i = 0; i < n; ++i) small::sub_scaled(-y[i], M + i * nv, x, k);
+  small::combine_rows(y, M, nv, n, x, k);
 }
 
-// n <= k: x = M^T (M M^T + lambda_0^2 I)^-1 rest when M M^T's eigenvalues clear the floor
-// (its Cholesky factorisation less floor I exists); lv.S keeps the solve's factor.
+// n <= k: x = M^T (M M^T + lambda_0^2 I)^-1 rest when M M^T's eigenvalues clear the floor.
+// Undamped, by modified Gram-Schmidt on M's rows (orthonormal_rows: M = L Q, L L^T =
+// M M^T), x = Q^T L^-1 rest, and Q is ready for remove_rows; damped, from the Cholesky
+// factorisation of M M^T + lambda_0^2 I (lv.S keeps the factor).
 bool Law::solve_rows(Level& lv, const double* M, const Tolerances& tol) {
   const int n = static_cast<int>(lv.rest.size()), nv = static_cast<int>(Z_.rows());
-  small::gram_rows(M, nv, n, k_, lv.A.data(), n);
-  if (!factor_shifted(lv.A.data(), n, n, -tol.floor, lv.S.data(), n) ||
-      !factor_shifted(lv.A.data(), n, n, tol.d2, lv.S.data(), n)) {
-    return false;
+  for (int i = 0; i < n; ++i) small::nonzero_range(M + i * nv, k_, lv.lo[i], lv.hi[i]);
+  q_ready_ = false;
+  if (tol.d2 > 0.0) {
+    small::gram_rows(M, nv, n, k_, lv.A.data(), n, lv.lo.data(), lv.hi.data());
+    if (!factor_regular(lv.A.data(), n, n, tol.floor, tol.d2, lv.S.data(), n, lv.work.data())) {
+      return false;
+    }
+    lv.y = lv.rest;
+    small::cholesky_solve(lv.S.data(), n, n, lv.y.data());
+    times_rows(M, n, lv.y.data());
+    return true;
   }
-  lv.y = lv.rest;
-  small::cholesky_solve(lv.S.data(), n, n, lv.y.data());
-  times_rows(M, n, lv.y.data());
+  if (!orthonormal_rows(M, n, lv.lo.data(), lv.hi.data(), lv.S.data())) return false;
+  if (!bound_clears(lv.S.data(), n, n, tol.top, tol.floor, 0.0, lv.work.data())) {
+    small::gram_rows(M, nv, n, k_, lv.A.data(), n, lv.lo.data(), lv.hi.data());
+    if (!factor_shifted(lv.A.data(), n, n, -tol.floor, Gs_.data(), nv)) return false;
+  }
+  double* y = lv.y.data();  // L y = rest, column by column
+  for (int i = 0; i < n; ++i) y[i] = lv.rest[i];
+  const double* L = lv.S.data();
+  for (int j = 0; j < n; ++j) {
+    y[j] /= L[j * n + j];
+    small::sub_scaled(y[j], L + j * n + j + 1, y + j + 1, n - j - 1);
+  }
+  small::combine_rows(y, P_.data(), nv, n, tk_.data(), k_);  // x = Q^T y
+  q_ready_ = true;
   return true;
 }
 
@@ -267,13 +249,8 @@ bool Law::solve_rows(Level& lv, const double* M, const Tolerances& tol) {
 // floor: JN JN^T's nonzero eigenvalues are M^T M's.
 bool Law::solve_columns(Level& lv, const double* M, const Tolerances& tol) {
   const int n = static_cast<int>(lv.rest.size()), k = k_, nv = static_cast<int>(Z_.rows());
-  G_.topLeftCorner(k, k).setZero();
-  for (int i = 0; i < n; ++i) {
-    const double* row = M + i * nv;
-    for (int j = 0; j < k; ++j) small::sub_scaled(-row[j], row, G_.data() + j * nv, k);
-  }
-  if (!factor_shifted(G_.data(), nv, k, -tol.floor, Gs_.data(), nv) ||
-      !factor_shifted(G_.data(), nv, k, tol.d2, Gs_.data(), nv)) {
+  small::gram_columns(M, nv, n, k, G_.data(), nv);
+  if (!factor_regular(G_.data(), nv, k, tol.floor, tol.d2, Gs_.data(), nv, lv.work.data())) {
     return false;
   }
   times_rows(M, n, lv.rest.data());
@@ -328,7 +305,10 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
   const int m = ext.m, v = r - m, nv = ext.nv;
   const int L = static_cast<int>(ends_.size());
   ext.demand(r, b_);
-  bool finite = small::all_finite(ext.J.data(), r * nv) && small::all_finite(b_.data(), r);
+  bool finite = small::all_finite(ext.J.data() + m * nv, v * nv) && small::all_finite(b_.data(), r);
+  for (int l = 0, start = 0; l < L; start = ends_[l++]) {  // each level's scale; J's finiteness
+    lscale_[l] = rows_scale(ext.J.data() + start * nv, ends_[l] - start, nv, finite);
+  }
   for (const Vec& z : z_) finite = finite && small::all_finite(z.data(), nv);
   if (!finite) {
     qdot.setConstant(std::numeric_limits<double>::quiet_NaN());
@@ -340,7 +320,7 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
   k_ = nv;
   z_identity_ = true;
   const int e1 = ends_[0];
-  const double scale1 = rows_scale(ext.J.data(), e1, nv);
+  const double scale1 = lscale_[0];
   if (v > 0) level_constraints(ext, v, scale1);
   out_ = parts_.row(0).transpose();
   double blocked = 0.0;
@@ -349,11 +329,15 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
     Level& lv = level_[static_cast<size_t>(l)];
     const int n = ends_[l] - start;
     const auto Jl = ext.J.middleRows(start, n);
-    for (int i = 0; i < n; ++i) {
-      lv.rest[i] = b_[start + i] - small::dot(Jl.row(i).data(), out_.data(), nv);
+    if (l == 0 && v == 0) {  // nothing above level 1 moves: out_ = 0
+      lv.rest = b_.head(n);
+    } else {
+      for (int i = 0; i < n; ++i) {
+        lv.rest[i] = b_[start + i] - small::dot(Jl.row(i).data(), out_.data(), nv);
+      }
     }
     Eigen::Map<Vec> part(parts_.row(1 + l).data(), nv);
-    solve_level(lv, Jl.data(), rows_scale(Jl.data(), n, nv), part.data());
+    solve_level(lv, Jl.data(), lscale_[l], part.data());
     if (l == 0 && !s_.budget_blocks) {  // measured on the law's own demand
       zp_ = out_ + part;
       blocked = unrealised_rows(ext, 0, e1, zp_);
@@ -389,9 +373,12 @@ double Law::unrealised_rows(const ExtendedTask& ext, int a, int b, const Vec& x)
   const auto bt = b_.segment(a, b - a);
   const double demand = bt.norm();
   if (demand == 0.0) return 0.0;
-  rest_.segment(a, b - a) = bt;
-  rest_.segment(a, b - a).noalias() -= ext.J.middleRows(a, b - a) * x;
-  return rest_.segment(a, b - a).norm() / demand;
+  double left = 0.0;
+  for (int i = a; i < b; ++i) {
+    const double r = b_[i] - small::dot(ext.J.row(i).data(), x.data(), ext.nv);
+    left += r * r;
+  }
+  return std::sqrt(left) / demand;
 }
 
 }  // namespace clik
