@@ -120,7 +120,7 @@ bool Law::orthonormal_rows(const double* M, int n, const int* lo, const int* hi,
   for (int i = 0; i < n; ++i) {
     double* q = P_.data() + i * nv;
     int wl = lo[i], wh = hi[i];
-    std::copy(M + i * nv, M + i * nv + k, q);
+    small::copy(M + i * nv, q, k);
     for (int c = 0; c < i; ++c) {
       const int from = std::max(wl, qlo[c]), to = std::min(wh, qhi[c]);
       double r = 0.0;

@@ -45,6 +45,10 @@ struct LawSettings {
 struct LevelPlan {
   std::vector<int> ends;
   std::vector<int> objective_levels;
+  // Where each task row of J may not be zero, [lo[i], hi[i]) (m each; lo nv, hi 0: a
+  // row that is always zero), from the tasks' structure (the joints supporting a frame,
+  // a posture row's joint). Empty: found in each sample's J.
+  std::vector<int> lo, hi;
 };
 
 class Law {
@@ -82,6 +86,7 @@ class Law {
   double prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot);
   void level_constraints(const ExtendedTask& ext, int v, double scale1);
   double unrealised_rows(const ExtendedTask& ext, int a, int b, const Vec& x);
+  double row_times(const ExtendedTask& ext, int i, const Vec& x) const;
   double prioritized(const ExtendedTask& ext, int r, Eigen::Ref<Vec> qdot);
   void constraint_level(const ExtendedTask& ext, int v, double epsilon);
   void one_constraint_level(const ExtendedTask& ext, double epsilon);
@@ -121,7 +126,8 @@ class Law {
     double floor = 0.0;           // the regular case's eigenvalues clear it
     double top = 0.0;             // bounds the Gram matrix's diagonal (scale^2)
   };
-  void solve_level(Level& lv, const double* Jl, double scale, double* part);
+  void solve_level(Level& lv, const double* Jl, const int* jlo, const int* jhi, double scale,
+                   double* part);
   bool solve_rows(Level& lv, const double* M, const Tolerances& tol);
   bool solve_columns(Level& lv, const double* M, const Tolerances& tol);
   int solve_eigenpairs(Level& lv, const double* M, const Tolerances& tol);
@@ -146,6 +152,8 @@ class Law {
   Vec out_, zp_;
   Vec lscale_;  // each level's scale (its largest row norm)
   std::vector<int> span_;  // remove_rows: where each row of Q may not be zero
+  std::vector<int> jlo_, jhi_;  // where each task row of J may not be zero: [jlo, jhi)
+  bool scan_rows_ = true;  // jlo_, jhi_ found in each sample's J (no plan.lo, plan.hi)
 };
 
 }  // namespace clik

@@ -50,6 +50,12 @@ Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& 
   zp_.setZero(nv);
   lscale_.setZero(L);
   span_.assign(2 * static_cast<size_t>(nv), 0);
+  scan_rows_ = plan.lo.empty();
+  if (!scan_rows_ && (plan.lo.size() != static_cast<size_t>(m) || plan.hi.size() != plan.lo.size())) {
+    throw std::invalid_argument("Law: plan.lo and plan.hi, one window per task row");
+  }
+  jlo_ = scan_rows_ ? std::vector<int>(static_cast<size_t>(m), 0) : plan.lo;
+  jhi_ = scan_rows_ ? std::vector<int>(static_cast<size_t>(m), nv) : plan.hi;
 }
 
 namespace {
@@ -84,10 +90,13 @@ bool bound_clears(const double* L, int ld, int n, double top, double floor, doub
 // S = the factor of A + d2 I (lower, S S^T) when A's eigenvalues are above the floor
 // (and A + d2 I positive definite); false otherwise. The floor is shown cleared by the
 // factor's own eigenvalue bound in the regular case; only when that bound is
-// inconclusive (or n <= 4, where a factorisation costs less than the bound) is
-// A - floor I factorised too. work holds 2 n.
+// inconclusive is A - floor I factorised too (first, for n <= 4, where a factorisation
+// costs less than the bound). work holds 2 n.
 bool factor_regular(const double* A, int lda, int n, double floor, double d2, double* S,
                     int lds, double* work) {
+  if (n <= 4) {
+    return factor_shifted(A, lda, n, -floor, S, lds) && factor_shifted(A, lda, n, d2, S, lds);
+  }
   if (!factor_shifted(A, lda, n, d2, S, lds)) return false;
   double top = 0.0;
   for (int j = 0; j < n; ++j) top = std::max(top, A[j * lda + j] + d2);
@@ -95,13 +104,16 @@ bool factor_regular(const double* A, int lda, int n, double floor, double d2, do
   return factor_shifted(A, lda, n, -floor, S, lds) && factor_shifted(A, lda, n, d2, S, lds);
 }
 
-// The largest row norm of n contiguous rows of nv (0 without rows); into finite, whether
-// every row's squared norm is finite (false for a NaN or an infinite entry, or an entry
-// beyond 1e154 whose square overflows).
-double rows_scale(const double* J, int n, int nv, bool& finite) {
+// The largest row norm of n contiguous rows of nv (0 without rows), each row taken over
+// [lo[i], hi[i]) where it may not be zero (with scan, found: a NaN or an infinite entry
+// is inside); into finite, whether every row's squared norm is finite (false for a NaN
+// or an infinite entry, or an entry beyond 1e154 whose square overflows).
+double rows_scale(const double* J, int n, int nv, bool scan, bool& finite, int* lo, int* hi) {
   double top = 0.0, zero = 0.0;
   for (int i = 0; i < n; ++i) {
-    const double s = small::dot(J + i * nv, J + i * nv, nv);
+    const double* row = J + i * nv;
+    if (scan) small::nonzero_range(row, nv, lo[i], hi[i]);
+    const double s = lo[i] < hi[i] ? small::dot(row + lo[i], row + lo[i], hi[i] - lo[i]) : 0.0;
     top = std::max(top, s);
     zero += s * 0.0;  // NaN once a sum is NaN or infinite
   }
@@ -163,7 +175,8 @@ void Law::level_constraints(const ExtendedTask& ext, int v, double scale1) {
 // eigenvalues). part = Z x with x from the smaller of the two Gram matrices when it is
 // regular (every eigenvalue above the filter's floor), from the eigenpairs of M M^T in
 // the damping band. A basis level then removes M's row space from Z.
-void Law::solve_level(Level& lv, const double* Jl, double scale, double* part) {
+void Law::solve_level(Level& lv, const double* Jl, const int* jlo, const int* jhi, double scale,
+                      double* part) {
   const int n = static_cast<int>(lv.rest.size()), k = k_, nv = static_cast<int>(Z_.rows());
   if (k == 0) {  // nothing left to move: JN = 0
     std::fill(part, part + nv, 0.0);
@@ -177,11 +190,15 @@ void Law::solve_level(Level& lv, const double* Jl, double scale, double* part) {
   // a basis level keeps every direction when the floor clears its tolerance too
   tol.floor = lv.basis ? std::max(tol.eps2, tol.kept) : tol.eps2;
   tol.top = scale * scale;  // M M^T's diagonal: |J_l Z row|^2 <= scale^2
-  // M = J_l Z, row i at M + i * nv (J_l itself while Z is the identity)
+  // M = J_l Z, row i at M + i * nv (J_l itself while Z is the identity), its windows
   const double* M = Jl;
-  if (!z_identity_) {
-    small::row_dots(Jl, nv, n, Z_.data(), nv, k, nv, lv.M.data(), nv, false);
+  if (z_identity_) {
+    std::copy(jlo, jlo + n, lv.lo.begin());
+    std::copy(jhi, jhi + n, lv.hi.begin());
+  } else {
+    small::row_dots(Jl, nv, n, Z_.data(), nv, k, nv, lv.M.data(), nv, false, jlo, jhi);
     M = lv.M.data();
+    for (int i = 0; i < n; ++i) small::nonzero_range(M + i * nv, k, lv.lo[i], lv.hi[i]);
   }
   const bool rows = n <= k && solve_rows(lv, M, tol);
   int p = n <= k ? n : k;  // the regular case keeps every direction
@@ -216,7 +233,6 @@ void Law::times_rows(const double* M, int n, const double* y) {
 // factorisation of M M^T + lambda_0^2 I (lv.S keeps the factor).
 bool Law::solve_rows(Level& lv, const double* M, const Tolerances& tol) {
   const int n = static_cast<int>(lv.rest.size()), nv = static_cast<int>(Z_.rows());
-  for (int i = 0; i < n; ++i) small::nonzero_range(M + i * nv, k_, lv.lo[i], lv.hi[i]);
   q_ready_ = false;
   if (tol.d2 > 0.0) {
     small::gram_rows(M, nv, n, k_, lv.A.data(), n, lv.lo.data(), lv.hi.data());
@@ -307,7 +323,8 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
   ext.demand(r, b_);
   bool finite = small::all_finite(ext.J.data() + m * nv, v * nv) && small::all_finite(b_.data(), r);
   for (int l = 0, start = 0; l < L; start = ends_[l++]) {  // each level's scale; J's finiteness
-    lscale_[l] = rows_scale(ext.J.data() + start * nv, ends_[l] - start, nv, finite);
+    lscale_[l] = rows_scale(ext.J.data() + start * nv, ends_[l] - start, nv, scan_rows_, finite,
+                            jlo_.data() + start, jhi_.data() + start);
   }
   for (const Vec& z : z_) finite = finite && small::all_finite(z.data(), nv);
   if (!finite) {
@@ -332,12 +349,11 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
     if (l == 0 && v == 0) {  // nothing above level 1 moves: out_ = 0
       lv.rest = b_.head(n);
     } else {
-      for (int i = 0; i < n; ++i) {
-        lv.rest[i] = b_[start + i] - small::dot(Jl.row(i).data(), out_.data(), nv);
-      }
+      for (int i = 0; i < n; ++i) lv.rest[i] = b_[start + i] - row_times(ext, start + i, out_);
     }
     Eigen::Map<Vec> part(parts_.row(1 + l).data(), nv);
-    solve_level(lv, Jl.data(), lscale_[l], part.data());
+    solve_level(lv, Jl.data(), jlo_.data() + start, jhi_.data() + start, lscale_[l],
+                part.data());
     if (l == 0 && !s_.budget_blocks) {  // measured on the law's own demand
       zp_ = out_ + part;
       blocked = unrealised_rows(ext, 0, e1, zp_);
@@ -375,10 +391,16 @@ double Law::unrealised_rows(const ExtendedTask& ext, int a, int b, const Vec& x)
   if (demand == 0.0) return 0.0;
   double left = 0.0;
   for (int i = a; i < b; ++i) {
-    const double r = b_[i] - small::dot(ext.J.row(i).data(), x.data(), ext.nv);
+    const double r = b_[i] - row_times(ext, i, x);
     left += r * r;
   }
   return std::sqrt(left) / demand;
+}
+
+// J's row i (a task row) times x, where the row may not be zero (rows_scale's windows).
+double Law::row_times(const ExtendedTask& ext, int i, const Vec& x) const {
+  const int from = jlo_[static_cast<size_t>(i)], to = jhi_[static_cast<size_t>(i)];
+  return from < to ? small::dot(ext.J.row(i).data() + from, x.data() + from, to - from) : 0.0;
 }
 
 }  // namespace clik

@@ -34,6 +34,13 @@ inline double dot(const double* a, const double* b, int n) {
   return s;
 }
 
+// y = x (n, not overlapping): inline, where std::copy calls memmove
+inline void copy(const double* x, double* y, int n) {
+  int i = 0;
+  for (; i + 2 <= n; i += 2) store(y + i, load(x + i));
+  if (i < n) y[i] = x[i];
+}
+
 // y -= alpha x (x and y do not overlap)
 inline void sub_scaled(double alpha, const double* x, double* y, int n) {
   const Pair a = {alpha, alpha};

@@ -53,8 +53,8 @@ const TaskConfig& TrackingRun::checked(const pinocchio::Model& model, const Task
 
 // The levels' end rows (LawConfig.levels) checked against the rows of the primary task
 // (always in the first level) and of the goals (a level holds whole goals).
-LevelPlan TrackingRun::level_plan(const TaskConfig& task, const LawConfig& law,
-                                  const Goals& goals) {
+LevelPlan TrackingRun::level_plan(const pinocchio::Model& model, const TaskConfig& task,
+                                  const LawConfig& law, const Goals& goals) {
   const int m0 = static_cast<int>(task.rows.size());
   const int m = m0 + goals.rows();
   if (law.K_task.size() != m || law.rows < m) {
@@ -92,6 +92,14 @@ LevelPlan TrackingRun::level_plan(const TaskConfig& task, const LawConfig& law,
     }
     plan.objective_levels.push_back(o.level);
   }
+  plan.lo.assign(static_cast<size_t>(m), model.nv);  // each row's columns (law (10)'s sums)
+  plan.hi.assign(static_cast<size_t>(m), 0);
+  frame_columns(model, task.frame, plan.lo[0], plan.hi[0]);
+  for (int i = 1; i < m0; ++i) {
+    plan.lo[static_cast<size_t>(i)] = plan.lo[0];
+    plan.hi[static_cast<size_t>(i)] = plan.hi[0];
+  }
+  goals.columns(model, plan.lo.data() + m0, plan.hi.data() + m0);
   return plan;
 }
 
@@ -101,7 +109,7 @@ TrackingRun::TrackingRun(const pinocchio::Model& model, const TaskConfig& task,
                          ConstraintRun* constraints, const std::vector<GoalConfig>& goals)
     : model_(model), data_(model), task_(checked(model, task, law, joints)),
       goals_(model, goals), m0_(static_cast<int>(task.rows.size())), m_(m0_ + goals_.rows()),
-      plan_(level_plan(task, law, goals_)), dt_(law.settings.dt), t_(t),
+      plan_(level_plan(model, task, law, goals_)), dt_(law.settings.dt), t_(t),
       ext_(m_, law.rows, model.nv, law.K_task),
       law_(law.settings, law.rows, model.nv, m_, plan_),
       objectives_(model, law.objectives, static_cast<int>(plan_.ends.size()), task.frame,
@@ -134,7 +142,7 @@ void TrackingRun::kinematics(const Vec& q) {
   for (int f : goals_.frames()) {
     pinocchio::updateFramePlacement(model_, data_, static_cast<pinocchio::FrameIndex>(f));
   }
-  J6_.setZero();
+  // the frame's support columns, the same at every sample (the others stay zero)
   pinocchio::getFrameJacobian(model_, data_, task_.frame, LWA, J6_);
 }
 

@@ -106,7 +106,8 @@ class TrackingRun {
   void observe_limits(double tk, const Vec& q);
   static const TaskConfig& checked(const pinocchio::Model& model, const TaskConfig& task,
                                    const LawConfig& law, const JointMonitorConfig& joints);
-  static LevelPlan level_plan(const TaskConfig& task, const LawConfig& law, const Goals& goals);
+  static LevelPlan level_plan(const pinocchio::Model& model, const TaskConfig& task,
+                              const LawConfig& law, const Goals& goals);
 
   const pinocchio::Model& model_;
   pinocchio::Data data_;

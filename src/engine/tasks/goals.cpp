@@ -1,6 +1,7 @@
 // The extra goals: see tasks/goals.hpp and clik/loop/tracking.py (the specification).
 #include "tasks/goals.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -42,6 +43,21 @@ double wrap_angle(double x) {
   return r - pi;
 }
 
+void frame_columns(const pinocchio::Model& model, int frame, int& lo, int& hi) {
+  const auto joint = model.frames[static_cast<size_t>(frame)].parentJoint;
+  for (const auto j : model.supports[joint]) {
+    if (j == 0) continue;  // the universe
+    const auto& jm = model.joints[j];
+    if (jm.shortname().find("Mimic") != std::string::npos) {
+      lo = 0;
+      hi = model.nv;
+      return;
+    }
+    lo = std::min(lo, jm.idx_v());
+    hi = std::max(hi, jm.idx_v() + jm.nv());
+  }
+}
+
 // -- FrameGoal -----------------------------------------------------------------------
 
 FrameGoalRun::FrameGoalRun(const pinocchio::Model& model, const FrameGoal& goal)
@@ -63,7 +79,9 @@ void FrameGoalRun::write(const GoalContext& c, const double* ref, const double* 
   const pinocchio::SE3& oMa = c.data.oMf[fa];
   const Eigen::Map<const Vec3> p_d(ref);
   const Eigen::Map<const RowMat3> R_d(ref + 3);
-  Ja_.setZero();
+  // getFrameJacobian writes the frame's support columns, the same at every sample: the
+  // others stay zero unless the relative form below wrote them
+  if (relative_to_ >= 0) Ja_.setZero();
   pinocchio::getFrameJacobian(c.model, c.data, fa, LWA, Ja_);
   const Eigen::Matrix<double, 6, Eigen::Dynamic>* J = &Ja_;
   if (relative_to_ < 0) {
@@ -113,6 +131,15 @@ void FrameGoalRun::norms(const ExtendedTask& ext, int row0, double& first, doubl
   first = pos ? std::sqrt(p2) : second;
 }
 
+void FrameGoalRun::columns(const pinocchio::Model& model, int* lo, int* hi) const {
+  int a = model.nv, b = 0;
+  frame_columns(model, frame_, a, b);
+  if (relative_to_ >= 0) frame_columns(model, relative_to_, a, b);
+  if (a >= b) a = model.nv, b = 0;
+  std::fill(lo, lo + rows(), a);
+  std::fill(hi, hi + rows(), b);
+}
+
 // -- PostureGoal ---------------------------------------------------------------------
 
 PostureGoalRun::PostureGoalRun(const pinocchio::Model& model, const PostureGoal& goal)
@@ -141,9 +168,7 @@ void PostureGoalRun::write(const GoalContext& c, const double* ref, const double
                          ? wrap_angle(ref[i] - std::atan2(c.q[iq + 1], c.q[iq]))
                          : ref[i] - c.q[iq];
     ext.e[row0 + i] = e;
-    auto row = ext.J.row(row0 + i);
-    row.setZero();
-    row[idx_v_[i]] = 1.0;
+    ext.J(row0 + i, idx_v_[i]) = 1.0;  // the row's other entries: zero from the start
     ext.ff[row0 + i] = ff[i];
   }
 }
@@ -152,6 +177,13 @@ void PostureGoalRun::norms(const ExtendedTask& ext, int row0, double& first,
                            double& second) const {
   first = ext.e.segment(row0, rows()).norm();
   second = 0.0;
+}
+
+void PostureGoalRun::columns(const pinocchio::Model&, int* lo, int* hi) const {
+  for (int i = 0; i < rows(); ++i) {
+    lo[i] = idx_v_[i];
+    hi[i] = idx_v_[i] + 1;
+  }
 }
 
 // -- ComGoal -------------------------------------------------------------------------
@@ -174,6 +206,11 @@ void ComGoalRun::write(const GoalContext& c, const double* ref, const double* ff
 void ComGoalRun::norms(const ExtendedTask& ext, int row0, double& first, double& second) const {
   first = ext.e.segment(row0, rows()).norm();
   second = 0.0;
+}
+
+void ComGoalRun::columns(const pinocchio::Model& model, int* lo, int* hi) const {
+  std::fill(lo, lo + rows(), 0);
+  std::fill(hi, hi + rows(), model.nv);
 }
 
 // -- Goals ---------------------------------------------------------------------------
@@ -221,6 +258,13 @@ void Goals::norms(const ExtendedTask& ext, int m0, Mat& out) const {
     const int start = g ? row_end_[g - 1] : 0;
     std::visit([&](const auto& run) { run.norms(ext, m0 + start, out(g, 0), out(g, 1)); },
                runs_[g]);
+  }
+}
+
+void Goals::columns(const pinocchio::Model& model, int* lo, int* hi) const {
+  for (int g = 0; g < count(); ++g) {
+    const int start = g ? row_end_[g - 1] : 0;
+    std::visit([&](const auto& run) { run.columns(model, lo + start, hi + start); }, runs_[g]);
   }
 }
 

@@ -15,6 +15,8 @@
 //     void write(const GoalContext&, const double* ref, const double* ff,
 //                ExtendedTask& ext, int row0);
 //     void norms(const ExtendedTask& ext, int row0, double& first, double& second) const;
+//     // where each row of its Jacobian may not be zero: [lo[i], hi[i]) (law (10)'s sums)
+//     void columns(const pinocchio::Model&, int* lo, int* hi) const;
 //   };
 //
 // The run visits the goals' std::variant (GoalRun): no virtual call, nothing allocated
@@ -71,6 +73,7 @@ class FrameGoalRun {
   void write(const GoalContext& c, const double* ref, const double* ff, ExtendedTask& ext,
              int row0);
   void norms(const ExtendedTask& ext, int row0, double& first, double& second) const;
+  void columns(const pinocchio::Model& model, int* lo, int* hi) const;
   int frame() const { return frame_; }
   int relative_to() const { return relative_to_; }
 
@@ -89,6 +92,7 @@ class PostureGoalRun {
   void write(const GoalContext& c, const double* ref, const double* ff, ExtendedTask& ext,
              int row0);
   void norms(const ExtendedTask& ext, int row0, double& first, double& second) const;
+  void columns(const pinocchio::Model& model, int* lo, int* hi) const;
 
  private:
   std::vector<int> idx_q_, idx_v_;
@@ -103,6 +107,7 @@ class ComGoalRun {
   void write(const GoalContext& c, const double* ref, const double* ff, ExtendedTask& ext,
              int row0);
   void norms(const ExtendedTask& ext, int row0, double& first, double& second) const;
+  void columns(const pinocchio::Model& model, int* lo, int* hi) const;
 
  private:
   std::vector<int> rows_;
@@ -112,6 +117,11 @@ using GoalRun = std::variant<FrameGoalRun, PostureGoalRun, ComGoalRun>;
 
 // The angle x wrapped into [-pi, pi) (clik/tasks/posture_task.py's np.remainder).
 double wrap_angle(double x);
+
+// Widens [lo, hi) to the velocity columns of the joints supporting frame (its Jacobian's
+// only nonzero columns); to every column when one of them is a mimic joint (whose column
+// is its leader's).
+void frame_columns(const pinocchio::Model& model, int frame, int& lo, int& hi);
 
 // One run's goals, in row order.
 class Goals {
@@ -134,6 +144,8 @@ class Goals {
              int m0);
   // (first, second) error norms of each goal, into norms (G, 2).
   void norms(const ExtendedTask& ext, int m0, Mat& out) const;
+  // Every goal row's columns (lo, hi: rows() each), the goal's columns().
+  void columns(const pinocchio::Model& model, int* lo, int* hi) const;
 
  private:
   std::vector<GoalRun> runs_;
