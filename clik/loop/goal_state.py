@@ -12,6 +12,7 @@ import numpy as np
 
 from clik.constraints.dexterity import dexterity_row
 from clik.loop.goal_rows import GoalChunks, GoalRows
+from clik.loop.reference_stream import rows_at_rest
 from clik.objectives import gradients
 
 if TYPE_CHECKING:
@@ -64,7 +65,7 @@ class GoalState:
         if self.chunks is None:
             return None, None, at_rest
         ref, ff = self.chunks.load(k)
-        return ref, ff, at_rest & ~np.any(ff != 0.0, axis=1)
+        return ref, ff, at_rest & rows_at_rest(ff)
 
     def objective_gradients(
         self, model: pin.Model, data: pin.Data, ext: ExtendedTask, q: np.ndarray

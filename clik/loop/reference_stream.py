@@ -71,6 +71,15 @@ def checked_sample(ref: object, n: int) -> Reference:
     return ref
 
 
+def rows_at_rest(ff: np.ndarray) -> np.ndarray:
+    """Whether each row of feed-forward ``ff`` (N, k) is all zeros (a NaN row is not).
+
+    ``|ff| 1 == 0`` by a matrix-vector product: a sum of magnitudes is zero only when
+    each is, and it is several times faster than ``~np.any(ff != 0, axis=1)``.
+    """
+    return np.abs(ff) @ np.ones(ff.shape[1]) == 0.0
+
+
 class ReferenceChunks:
     """Chunks of a trajectory's reference on the time grid ``t``.
 
@@ -107,7 +116,7 @@ class ReferenceChunks:
         c1 = min(c0 + self.size, self.t.shape[0])
         ref = checked_sample(self.trajectory.sample(self.t[c0:c1]), c1 - c0)
         P_d, R_d, FF = task_reference(self.task, ref)
-        at_rest = ~np.any(FF != 0.0, axis=1)
+        at_rest = rows_at_rest(FF)
         if self.center is not None and P_d is not None:
             dist = np.linalg.norm(P_d - self.center, axis=1)
             i = int(np.argmax(dist))

@@ -81,10 +81,11 @@ def velocity_names(model: Any) -> list[str]:
         model: A ``pinocchio.Model``.
     """
     names = [""] * int(model.nv)
-    for name, joint in zip(list(model.names)[1:], list(model.joints)[1:], strict=True):
-        span = range(joint.idx_v, joint.idx_v + joint.nv)
-        for k, i in enumerate(span):
-            names[i] = name if joint.nv == 1 else f"{name}[{k}]"
+    # model.idx_vs and model.nvs: plain integers (model.joints would wrap each joint)
+    joints = zip(list(model.names)[1:], list(model.idx_vs)[1:], list(model.nvs)[1:], strict=True)
+    for name, idx_v, nv in joints:
+        for k, i in enumerate(range(idx_v, idx_v + nv)):
+            names[i] = name if nv == 1 else f"{name}[{k}]"
     return names
 
 

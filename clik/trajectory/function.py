@@ -87,9 +87,9 @@ class Function(Trajectory):
         for name, value in (("x_d", x), ("xdot_d", xdot)):
             if value.shape != (n, 3):
                 raise InputError("trajectory", expected, f"{name} of shape {value.shape}")
-            bad = ~np.isfinite(value).all(axis=1)
-            if bad.any():
-                k = int(np.flatnonzero(bad)[0])
+            finite = np.isfinite(value)
+            if not finite.all():
+                k = int(np.flatnonzero(~finite.all(axis=1))[0])
                 raise InputError(
                     "trajectory",
                     expected,

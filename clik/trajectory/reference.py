@@ -72,9 +72,9 @@ class Reference:
                     f"shape {(n, *trailing)} for {n} samples",
                     f"shape {array.shape}",
                 )
-            bad = ~np.isfinite(array.reshape(n, -1)).all(axis=1)
-            if bad.any():
-                k = int(np.flatnonzero(bad)[0])
+            finite = np.isfinite(array)
+            if not finite.all():  # the row, only then (a reduction along rows is slow)
+                k = int(np.flatnonzero(~finite.reshape(n, -1).all(axis=1))[0])
                 shown = np.array2string(array[k], separator=", ").replace("\n", "")
                 raise InputError(
                     "trajectory", "finite values", f"{name}[{k}] = {shown} at t = {t[k]:.6g} s"
