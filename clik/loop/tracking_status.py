@@ -119,10 +119,20 @@ def speed_excess(result: TrackingResult) -> str | None:
     bound = speed_bounds(result)
     if bound is None or result.qdot.shape[0] == 0 or bound.shape[0] != result.qdot.shape[1]:
         return None
+    limited = np.isfinite(bound) & (bound > 0.0)
+    # Each coordinate's fastest sample first (along the rows of the transposed copy:
+    # ~10x faster than along axis 0 of a long (N, nv) array); max(s) / b == max(s / b)
+    # exactly (rounding is monotonic), so no sample is over when no coordinate's peak is.
+    peak = np.abs(np.ascontiguousarray(result.qdot.T)).max(axis=1)
+    if np.isfinite(peak).all():
+        with np.errstate(invalid="ignore"):
+            peak_ratio = np.where(limited, peak / bound, 0.0)
+        if not (peak_ratio > 1.0 + SPEED_ROUNDING).any():
+            return None
     speed = np.abs(result.qdot)
     speed[~np.isfinite(speed)] = 0.0
     with np.errstate(invalid="ignore"):
-        ratio = np.where(np.isfinite(bound) & (bound > 0.0), speed / bound, 0.0)
+        ratio = np.where(limited, speed / bound, 0.0)
     over = ratio > 1.0 + SPEED_ROUNDING
     if not over.any():
         return None

@@ -62,6 +62,9 @@ class Run:
     speed_limits: SpeedLimits | None = None
     goals: list[Goal] = field(default_factory=list)
     """``[[tasks]]``: every goal (``task`` and ``trajectory`` are then the primary's)."""
+    scenario_file: str = ""
+    """The scenario file's absolute path (resolved when built: ``info["scenario_file"]``);
+    empty: resolved when the run executes."""
 
     def execute(self, progress: ProgressCallback | None = None) -> TrackingResult:
         """Run the tracking loop (in re-timing passes when ``speed_limits`` is set)."""
@@ -78,7 +81,7 @@ class Run:
                 **kwargs,
             )  # fmt: skip
         result.info["scenario"] = self.scenario.name
-        result.info["scenario_file"] = str(self.scenario.file.resolve())
+        result.info["scenario_file"] = self.scenario_file or str(self.scenario.file.resolve())
         result.info["robot_source"] = self.scenario.robot["source"]
         result.info["robot_lock"] = dict(self.scenario.robot["lock"])
         cset = self.tracker.constraints
@@ -155,6 +158,7 @@ def build(scenario: Scenario | str | Path, robot: Robot | None = None) -> Run:
     return Run(
         scenario, robot, task, trajectory, tracker, q0, _speed_limits(scenario, robot),
         goals=[] if several is None else several.goals,
+        scenario_file=str(scenario.file.resolve()),
     )  # fmt: skip
 
 

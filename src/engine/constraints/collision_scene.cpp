@@ -100,7 +100,10 @@ Mat motion_bounds(const pinocchio::Model& model, const SceneConfig& scene) {
 }
 
 CollisionScene::CollisionScene(const SceneConfig& scene)
-    : scene_(&scene), gdata_(*scene.gmodel),
+    : scene_(&scene),
+      moving_of_(scene.gmodel->ngeoms, -1),
+      gdata_(*scene.gmodel),
+      placed_at_(scene.gmodel->ngeoms, 0),
       joint_pos_(static_cast<Eigen::Index>(scene.joints.size()), 3) {
   for (auto& request : gdata_.distanceRequests) {
     // GJK's default 1e-6 m tolerance makes hull-hull witness points jitter by that
@@ -116,14 +119,33 @@ CollisionScene::CollisionScene(const SceneConfig& scene)
 }
 
 void CollisionScene::move_with(const ObstacleConfig& obstacle) {
-  if (obstacle.moving()) moving_.push_back(obstacle);
+  if (!obstacle.moving()) return;
+  moving_of_.at(static_cast<std::size_t>(obstacle.geometry)) = static_cast<int>(moving_.size());
+  moving_.push_back(obstacle);
 }
 
-void CollisionScene::place_geometries(const pinocchio::Model& model, const pinocchio::Data& data,
-                                      double t) {
-  pinocchio::updateGeometryPlacements(model, data, *scene_->gmodel, gdata_);
-  // A world-attached geometry's oMg is its placement (updateGeometryPlacements).
-  for (const ObstacleConfig& ob : moving_) gdata_.oMg[ob.geometry] = ob.placement(t);
+void CollisionScene::begin_sample(const pinocchio::Data& data, double t) {
+  data_ = &data;
+  t_ = t;
+  ++sample_;
+}
+
+// Only the geometries a distance asks for are placed (a pair near its threshold: a few
+// of a robot's geometries), each once per sample.
+void CollisionScene::place(pinocchio::GeomIndex g) {
+  if (placed_at_[g] == sample_) return;
+  placed_at_[g] = sample_;
+  if (moving_of_[g] >= 0) {
+    gdata_.oMg[g] = moving_[static_cast<std::size_t>(moving_of_[g])].placement(t_);
+    return;
+  }
+  const pinocchio::GeometryObject& object = scene_->gmodel->geometryObjects[g];
+  // updateGeometryPlacements: oMi[joint] placement, or the placement for the world
+  if (object.parentJoint > 0) {
+    gdata_.oMg[g] = data_->oMi[object.parentJoint] * object.placement;
+  } else {
+    gdata_.oMg[g] = object.placement;
+  }
 }
 
 const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& CollisionScene::place_joints(
@@ -137,6 +159,9 @@ const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& CollisionScene:
 
 void CollisionScene::distance(int pair, PairDistance& out) {
   const auto index = static_cast<pinocchio::PairIndex>(pair);
+  const pinocchio::CollisionPair& geometries = scene_->gmodel->collisionPairs[index];
+  place(geometries.first);
+  place(geometries.second);
   const coal::DistanceResult& res = pinocchio::computeDistance(*scene_->gmodel, gdata_, index);
   gdata_.distanceRequests[index].updateGuess(res);
   out.distance = res.min_distance;

@@ -13,6 +13,7 @@
 
 #include <memory>
 #include <string>
+#include <cstdint>
 #include <vector>
 
 #include <pinocchio/multibody/data.hpp>
@@ -90,22 +91,31 @@ class CollisionScene {
   // geometries (a moving obstacle's kind registers it once).
   void move_with(const ObstacleConfig& obstacle);
 
-  // Place every geometry at data.oMi (one pass) and the moving obstacles at time t [s].
-  void place_geometries(const pinocchio::Model& model, const pinocchio::Data& data, double t);
+  // A new sample: geometries are placed at data.oMi (a moving obstacle at time t [s])
+  // when a distance first asks for them (`data` must outlive the sample's queries).
+  void begin_sample(const pinocchio::Data& data, double t);
 
   // Joint origins (n_joints, 3) [m] from data.oMi: bounding-sphere centres.
   const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& place_joints(
       const pinocchio::Data& data);
 
-  // Distance of collision pair `pair` at the current placements.
+  // Distance of collision pair `pair` at this sample's placements.
   void distance(int pair, PairDistance& out);
 
   const SceneConfig& config() const { return *scene_; }
 
  private:
   const SceneConfig* scene_;
+  // oMg of geometry g at this sample, as updateGeometryPlacements gives it (once per sample)
+  void place(pinocchio::GeomIndex g);
+
   std::vector<ObstacleConfig> moving_;  // obstacles with a velocity
+  std::vector<int> moving_of_;          // per geometry: its index in moving_, or -1
   pinocchio::GeometryData gdata_;
+  const pinocchio::Data* data_ = nullptr;  // this sample's kinematics
+  double t_ = 0.0;                         // this sample's time [s]
+  std::uint64_t sample_ = 0;               // counts begin_sample()
+  std::vector<std::uint64_t> placed_at_;   // per geometry: the sample it was placed at
   Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> joint_pos_;
 };
 

@@ -96,10 +96,10 @@ class ScenePlacement {
                  const pinocchio::Data& data, double t)
       : scene_(scene), model_(model), data_(data), t_(t) {}
 
-  // The scene with every geometry placed at this sample (distances may be asked).
+  // The scene for this sample: each geometry is placed when a distance first asks for it.
   CollisionScene& placed() {
     if (!placed_) {
-      scene_->place_geometries(model_, data_, t_);
+      scene_->begin_sample(data_, t_);
       placed_ = true;
     }
     return *scene_;

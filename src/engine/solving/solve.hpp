@@ -74,11 +74,12 @@ class LawSystem {
   RowVec e;                                       // task error (m)
 
  private:
-  void solve_small();  // y = A^-1 e
+  void solve_small();     // y = A^-1 e
+  bool cholesky_solve();  // y = A^-1 e when A is positive definite
 
   RowVec y_, tmp_;
   Square A_;
-  Eigen::LLT<Square> llt_;
+  Square L_;  // the Cholesky factor of A_ (lower triangle)
   Eigen::JacobiSVD<Square> svd_;
 };
 
@@ -121,6 +122,7 @@ class Solver {
   Attempt attempt();
   void attempt_from_q();
   void error(const Vec& q);
+  void pose_jacobian();
   void world_errors(double& pos, double& rot) const;
   void step(double err2);
 
