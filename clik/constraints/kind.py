@@ -40,6 +40,7 @@ if TYPE_CHECKING:
     from clik.constraints.violations import ViolationMonitor
     from clik.model.robot import Robot
     from clik.outputs.result import TrackingResult
+    from clik.trajectory.clock import Clock
 
 
 CHECK_TOLERANCE = 1e-12
@@ -130,7 +131,7 @@ class RunSetup:
     robot: Robot
     m: int
     law: str
-    t: np.ndarray
+    t: np.ndarray | Clock
     n_rec: int
     frame_id: int
     task_rows: np.ndarray

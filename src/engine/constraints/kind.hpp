@@ -27,7 +27,8 @@
 //     const std::optional<double>& gain() const;
 //     // optional (KindDefaults has them doing nothing):
 //     void observe_limits(double tk, ViolationMonitor&, const std::vector<std::string>&) const;
-//     void record(int j);                            // recorded sample j
+//     void record(int j);                            // recorded sample j: all of its row
+//                                                    // (a ring's slot j is written again)
 //     double min_distance() const;                   // exact nearest obstacle distance [m]
 //     void records(std::vector<RecordArray>& out) const;  // after the run, to Python
 //   };
@@ -78,7 +79,7 @@ struct KindSetup {
   int slot;                       // the kind's index among the run's kinds
   int m;                          // task rows of every goal: the constraint rows' offset
   int task_m;                     // the primary task's rows 0..task_m (its frame, task_rows)
-  const TimesView& t;             // the run's time grid [s]
+  const Clock& t;                 // the run's times [s]
   int n_rec;                      // recorded samples
   int frame;                      // the task's frame (-1: none given)
   const std::vector<int>& task_rows;  // the task's rows among (x, y, z, rx, ry, rz)

@@ -104,7 +104,7 @@ LevelPlan TrackingRun::level_plan(const pinocchio::Model& model, const TaskConfi
 }
 
 TrackingRun::TrackingRun(const pinocchio::Model& model, const TaskConfig& task,
-                         const LawConfig& law, const StopConfig& stop, const TimesView& t,
+                         const LawConfig& law, const StopConfig& stop, const Clock& t,
                          const RecordBuffers& record, JointMonitorConfig joints,
                          ConstraintRun* constraints, const std::vector<GoalConfig>& goals)
     : model_(model), data_(model), task_(checked(model, task, law, joints)),
@@ -182,11 +182,18 @@ void TrackingRun::error_norms(double& pos, double& rot) const {
 // 5. Why the run must stop at sample k, if it must.
 Stop TrackingRun::stop(long k, double err, int r, double blocked, bool at_rest) {
   Stop why = checks_.divergence(qdot_, err);
-  if (why == Stop::none) why = checks_.instability(static_cast<int>(k), ext_, r, err);
+  if (why == Stop::none) why = checks_.instability(k, ext_, r, err);
   if (why != Stop::none) return why;
   if (checks_.deadlock(ext_, r, err, blocked)) return Stop::deadlock;
-  if (checks_.stall(static_cast<int>(k), err, at_rest)) return Stop::stall;
+  if (checks_.stall(k, err, at_rest)) return Stop::stall;
   return Stop::none;
+}
+
+// 6. q_{k+1} = q_k (+) qdot_k dt (pin.integrate), in place.
+void TrackingRun::step(Vec& q) {
+  dq_ = qdot_ * dt_;
+  pinocchio::integrate(model_, q, dq_, qnext_);
+  q.swap(qnext_);
 }
 
 // Every limit crossed at this sample: joints, obstacle surfaces, link pairs.
@@ -233,6 +240,7 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
     double err = 0.0, err_rot = 0.0;
     error_norms(err, err_rot);
     err_ = err;
+    err_rot_ = err_rot;
     max_err_ = std::max(max_err_, err);
     double err_stop = err;
     if (goals_.count() > 0) {
@@ -260,14 +268,12 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
       out.k = k;
       out.r = r;
       out.err = err_stop;
+      // an open run goes on: past a deadlock or a stall as usual; a divergence holds q_k
+      if (t_.is_open() && (why == Stop::deadlock || why == Stop::stall)) step(qv);
       q = qv;
       return out;
     }
-    if (k + 1 < N) {
-      dq_ = qdot_ * dt_;
-      pinocchio::integrate(model_, qv, dq_, qnext_);
-      qv.swap(qnext_);
-    }
+    if (k + 1 < N) step(qv);  // always in an open run (N: LONG_MAX)
   }
   out.next = c1;
   q = qv;
