@@ -138,14 +138,21 @@ class Controller:
         )  # fmt: skip
         ticks = PythonTicks if tr.engine == "python" else CompiledTicks
         self._ticks = ticks(self._run, q0)
+        self._fast = None  # the engine reads one frame task's target itself
+        self._q = self._ticks.q  # the engine's (written in place) or the Python loop's
+        if isinstance(self._ticks, CompiledTicks):
+            self._qdot = self._ticks.qdot_buffer
+            if tr.stack is None:
+                self._fast = self._ticks.ticker.step
+        self._name = self.names[0]
+        self._constrained = tr.constraints is not None
         self.k = 0
         """The next tick's index (its time is ``k dt``)."""
         self._seen = 0
-        self._notes = 0
-        self._above_since: float | None = None
         self._worst: tuple[str, str] = ("ok", "")
         self._wall = 0.0
-        self._previous: tuple[np.ndarray | None, ...] | None = None
+        self._previous: tuple[np.ndarray | None, ...] | None = None  # a packed tick's
+        self._previous_k = -1  # ... and its index (a tick of the engine's fast path between)
 
     @property
     def q(self) -> np.ndarray:
@@ -175,21 +182,56 @@ class Controller:
         Raises:
             InputError: A missing or malformed target or velocity (named).
         """
+        fast = self._fast
+        if fast is not None and type(targets) is np.ndarray:  # the engine reads the target
+            try:
+                out = fast(targets, velocities)
+            except TypeError:  # not float64 and C-contiguous: the general path converts
+                out = None
+            if out is not None:  # else: a shape the task does not take, named below
+                code, err, err_rot, n_events, tk = out
+                k = self.k
+                self.k = k + 1
+                verdict, reason = ("ok", "") if code == 0 else self._engine_verdict(code, tk)
+                events: list[dict[str, Any]] = []
+                if n_events != self._seen:
+                    events = self._ticks.events_since(self._seen)
+                    self._seen = n_events
+                return Tick(
+                    self._q.copy(), self._qdot.copy(), tk, k, verdict, reason, events,
+                    self._ticks.active() if self._constrained else [], {self._name: (err, err_rot)},
+                )  # fmt: skip
+        return self._step(targets, velocities)
+
+    def _engine_verdict(self, code: int, tk: float) -> tuple[str, str]:
+        """The engine's verdict ``code`` in words, kept if the session's worst."""
+        ticks: Any = self._ticks  # CompiledTicks
+        verdict, reason = ticks.verdict_of(code, tk)
+        self._note(verdict, reason)
+        return verdict, reason
+
+    def _step(self, targets: Any, velocities: Any) -> Tick:
+        """:meth:`step` with the targets packed in Python (any tasks, any form)."""
         start = time.perf_counter()
         k, ticks = self.k, self._ticks
         tk = self._run.t[k]
         refs = self._references(targets, velocities, tk)
-        stop = ticks.tick(k, refs)
+        verdict, reason = ticks.tick(k, refs)
         self.k = k + 1
-        verdict, reason = self._verdict(stop, tk)
+        self._note(verdict, reason)
         events = ticks.events_since(self._seen)
         self._seen += len(events)
         errors = dict(zip(self.names, ticks.errors(), strict=True))
         self._wall += time.perf_counter() - start
         return Tick(
-            q=ticks.q.copy(), qdot=np.array(ticks.qdot), t=tk, k=k, verdict=verdict,
-            reason=reason, events=events, active=ticks.active(), errors=errors,
+            q=ticks.q.copy(), qdot=ticks.qdot, t=tk, k=k, verdict=verdict, reason=reason,
+            events=events, active=ticks.active(), errors=errors,
         )  # fmt: skip
+
+    def _note(self, verdict: str, reason: str) -> None:
+        """Keep the session's worst verdict (its result's status)."""
+        if _RANK[verdict] > _RANK[self._worst[0]]:
+            self._worst = (verdict, reason)
 
     def _references(self, targets: Any, velocities: Any, tk: float) -> tuple[Any, ...]:
         """This tick's references as the loop reads them (one-sample arrays)."""
@@ -214,10 +256,11 @@ class Controller:
             at_rest = at_rest & rows_at_rest(g_ff)
         P_d = None if P_d is None else np.ascontiguousarray(P_d)
         R_d = None if R_d is None else np.ascontiguousarray(R_d)
-        refs = (P_d, R_d, g_ref)
+        task = self.tracker.task
+        refs = (P_d if task.has_position else None, R_d if task.has_orientation else None, g_ref)
         if len(speeds) < len(self.names):  # a velocity not given: at rest only if unmoved
             at_rest = at_rest & self._unmoved(refs)
-        self._previous = refs
+        self._previous, self._previous_k = refs, self.k
         return P_d, R_d, np.ascontiguousarray(FF), at_rest, g_ref, g_ff
 
     def _unmoved(self, refs: tuple[np.ndarray | None, ...]) -> bool:
@@ -228,49 +271,14 @@ class Controller:
         so it counts as at rest only while it stays where it was.
         """
         before = self._previous
-        return before is not None and all(
-            (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
-            for a, b in zip(refs, before, strict=True)
-        )
-
-    def _verdict(self, stop: tuple[str, str] | None, tk: float) -> tuple[str, str]:
-        """The tick's verdict and reason, the worst that holds (docs/method.md)."""
-        ticks = self._ticks
-        if stop is not None:
-            found = stop
-        elif ticks.notes != self._notes:
-            crossed = ticks.crossed(tk)
-            worst = max(crossed, key=lambda r: r.worst) if crossed else None
-            found = ("violated", "a limit was crossed" + (
-                f": {worst.describe()}" if worst is not None else ""
-            ))  # fmt: skip
-        else:
-            found = self._off_track(tk)
-        self._notes = ticks.notes
-        if _RANK[found[0]] > _RANK[self._worst[0]]:
-            self._worst = found
-        return found
-
-    def _off_track(self, tk: float) -> tuple[str, str]:
-        """``off_track`` once the primary task's error has stayed above the tolerance."""
-        run, tol = self._run, self.tolerance
-        has_position = self.tracker.task.has_position
-        limit = tol.position if has_position else tol.orientation
-        above = not (run.err <= limit)
-        if has_position and self.tracker.task.has_orientation:
-            above = above or not (run.err_rot <= tol.orientation)
-        if not above:
-            self._above_since = None
-            return "ok", ""
-        if self._above_since is None:
-            self._above_since = tk
-        held = tk - self._above_since
-        if held <= tol.settling_time:
-            return "ok", ""
-        return "off_track", (
-            f"off_track: the task error has stayed above the tolerance ({tol.position:g} m, "
-            f"{tol.orientation:g} rad) for {held:.3g} s, since t = {self._above_since:.6g} s "
-            f"(now {run.err:.4g}); the settling time is {tol.settling_time:g} s"
+        return (
+            before is not None
+            and self._previous_k == self.k - 1
+            and all(
+                (a is None and b is None)
+                or (a is not None and b is not None and np.array_equal(a, b))
+                for a, b in zip(refs, before, strict=True)
+            )
         )
 
     def result(self) -> TrackingResult:
@@ -286,7 +294,9 @@ class Controller:
         if status in ("ok", "violated", "off_track"):  # judged below, as an offline run
             status = "completed"
             reason = f"ran {self.k} ticks ({max(self.k - 1, 0) * self.dt:.6g} s)"
-        return self._run.finished(status, reason, self._wall)
+        ticks: Any = self._ticks
+        wall = ticks.ticker.wall if isinstance(ticks, CompiledTicks) else self._wall
+        return self._run.finished(status, reason, wall)
 
 
 def _count(value: Any, field: str) -> int:

@@ -12,7 +12,7 @@ VERDICTS = ("ok", "deadlock", "violated", "diverged", "off_track")
 ``diverged``, ``deadlock``, ``violated``, ``off_track``, then ``ok``."""
 
 
-@dataclass
+@dataclass(slots=True)
 class Tick:
     """One tick: the next joints, this tick's events and errors, and a verdict.
 

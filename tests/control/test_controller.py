@@ -31,16 +31,21 @@ def twin(tracker: clik.Tracker, q0: np.ndarray, **more: object) -> clik.Controll
     )  # fmt: skip
 
 
-def stepped(ctl: clik.Controller, trajectory: object, t: np.ndarray) -> tuple[np.ndarray, list]:
-    """Step ``ctl`` on the trajectory's samples at ``t``; the joints q_0 .. q_{N-1}, events."""
+def stepped(
+    ctl: clik.Controller, trajectory: object, t: np.ndarray, matrix: bool = False
+) -> tuple[np.ndarray, list]:
+    """Step ``ctl`` on the trajectory's samples at ``t``; the joints q_0 .. q_{N-1}, events.
+
+    ``matrix``: a pose target as a 4x4 array (the engine reads it: the fast path), else
+    a ``pin.SE3`` (packed in Python).
+    """
     ref = trajectory.sample(t)  # type: ignore[attr-defined]
     qs, events = [ctl.q], []
     for k in range(t.shape[0]):
-        targets = (
-            ref.position[k] if ref.rotation is None else pin.SE3(ref.rotation[k], ref.position[k])
-        )
-        velocity = ref.linear_velocity[k]
+        targets, velocity = ref.position[k], ref.linear_velocity[k]
         if ref.rotation is not None:
+            targets = pin.SE3(ref.rotation[k], ref.position[k])
+            targets = targets.homogeneous if matrix else targets
             velocity = np.concatenate([velocity, ref.angular_velocity[k]])
         tick = ctl.step(targets, velocity)
         assert tick.verdict == "ok", tick.reason
@@ -73,8 +78,8 @@ def test_case_study_run_4_tick_by_tick_is_track(engine: str) -> None:
     assert np.abs(online.min_obstacle_distance - offline.min_obstacle_distance).max() <= 1e-12
 
 
-@pytest.mark.parametrize("engine", ENGINES)
-def test_panda_obstacle_scene_tick_by_tick_is_track(engine: str) -> None:
+@pytest.mark.parametrize(("engine", "matrix"), [(e, m) for e in ENGINES for m in (False, True)])
+def test_panda_obstacle_scene_tick_by_tick_is_track(engine: str, matrix: bool) -> None:
     run = build(scenario_path("panda_circle"))
     line = Prefix(run.trajectory, 1.0)
     tracker = clik.Tracker(
@@ -85,7 +90,7 @@ def test_panda_obstacle_scene_tick_by_tick_is_track(engine: str) -> None:
     assert_completed(offline, run.robot)
     assert offline.events, "a sphere's row should switch on along the circle"
     ctl = twin(tracker, run.q0)
-    q, events = stepped(ctl, line, offline.t)
+    q, events = stepped(ctl, line, offline.t, matrix)
     assert np.abs(q - offline.q).max() <= 1e-12
     assert events == offline.events
     online = ctl.result()
@@ -104,14 +109,16 @@ def test_a_target_out_of_reach_and_back(engine: str) -> None:
     home = task.placement(q0).translation.copy()
     far = home + np.array([2.0, 0.0, 0.0])  # 2 m away: beyond the arm's reach
     ctl = clik.Controller(task, gain=100.0, engine=engine, q0=q0)
+    vmax = np.asarray(robot.model.velocityLimit)
     verdicts = []
     qs = []
     for k in range(3000):
-        target = far if 200 <= k < 1500 else home
+        target = far if 200 <= k < 1500 else home  # two jumps of 2 m
         tick = ctl.step(target)
         verdicts.append(tick.verdict)
         qs.append(tick.q)
         assert np.all(np.isfinite(tick.q))
+        assert np.all(np.abs(tick.qdot) <= vmax * (1 + 1e-9)), k  # the correction within them
     qs_a = np.array(qs)
     assert np.all(qs_a >= robot.lower - 1e-9) and np.all(qs_a <= robot.upper + 1e-9)
     assert "deadlock" in verdicts[200:1500], sorted(set(verdicts))
@@ -139,10 +146,14 @@ def test_the_record_is_a_ring_of_the_last_ticks(engine: str) -> None:
     assert np.allclose(online.joint_min, offline.joint_min, atol=1e-12)
 
 
-def test_bad_targets_are_refused_by_name() -> None:
+@pytest.mark.parametrize("engine", ENGINES)
+def test_bad_targets_are_refused_by_name(engine: str) -> None:
     robot = clik.Robot.load("planar4r")
     task = clik.Task(robot, "tip", "position", axes=["x", "y"])
-    ctl = clik.Controller(task, engine="python", q0=np.radians([180, -30, -90, -30]))
+    ctl = clik.Controller(task, engine=engine, q0=np.radians([180, -30, -90, -30]))
+    for bad in (np.array([np.nan, 0.0, 0.0]), np.zeros(2), np.eye(4)[:3]):  # the engine's path
+        with pytest.raises(clik.InputError, match=r"targets\['task'\]"):
+            ctl.step(bad)
     with pytest.raises(clik.InputError, match=r"targets\['task'\]"):
         ctl.step([1.0, 2.0])
     with pytest.raises(clik.InputError, match=r"targets\['task'\]"):

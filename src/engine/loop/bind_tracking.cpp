@@ -24,6 +24,7 @@
 #include "constraints/bind_constraints.hpp"
 #include "constraints/constraint_run.hpp"
 #include "loop/bind_record.hpp"
+#include "loop/py_tracking_run.hpp"
 #include "loop/recording.hpp"
 #include "loop/tracking.hpp"
 #include "model/model_bridge.hpp"
@@ -36,32 +37,6 @@ namespace {
 
 template <typename T>
 using Array = WrittenArray<T>;
-template <typename T>
-using In = nb::ndarray<const T, nb::c_contig, nb::device::cpu>;
-
-const char* stop_name(Stop s) {
-  switch (s) {
-    case Stop::none: return "";
-    case Stop::non_finite: return "non_finite";
-    case Stop::joint_step: return "joint_step";
-    case Stop::unstable: return "unstable";
-    case Stop::deadlock: return "deadlock";
-    case Stop::stall: return "stall";
-  }
-  return "";
-}
-
-// A run and the Python objects whose memory it uses (kept alive with it).
-struct PyTrackingRun {
-  nb::object model;
-  ModelShape built;   // the model's sizes when the run was built
-  long next = 0;      // the sample the next advance() starts at
-  bool stopped = false;  // never in an open run
-  std::optional<In<double>> times;  // none: an open run
-  RecordArrays record;
-  std::unique_ptr<ConstraintRun> constraints;  // before run: it outlives the loop's use
-  std::unique_ptr<TrackingRun> run;
-};
 
 // The run's times: the grid t (N,) of an offline run, read in place; without t an open
 // run's t0 + k dt (dt: the law's), whose record is a ring (and a ring's run is open).
@@ -444,6 +419,7 @@ void bind_tracking(nb::module_& m) {
         }
         return out;
       });
+  bind_ticker(m);
 }
 
 }  // namespace clik

@@ -119,6 +119,7 @@ TrackingRun::TrackingRun(const pinocchio::Model& model, const TaskConfig& task,
       monitor_(std::move(joints)),
       crun_(constraints), J6_(6, model.nv), e6_(Eigen::Matrix<double, 6, 1>::Zero()),
       qdot_(Vec::Zero(model.nv)), dq_(Vec::Zero(model.nv)), qnext_(Vec::Zero(model.nq)),
+      qv_(Vec::Zero(model.nq)),
       goal_norms_(Mat::Zero(goals_.count(), 2)), goal_max_(Mat::Zero(goals_.count(), 2)) {
   J6_.setZero();
   for (int row : task.rows) (row < 3 ? pos_rows_ : rot_rows_).push_back(row);
@@ -206,28 +207,28 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
                              const double* FF, const bool* at_rest, Eigen::Ref<Vec> q,
                              const double* goal_ref, const double* goal_ff) {
   const long N = t_.size();
-  Vec qv = q;  // the state as a Vec (one copy per chunk)
+  qv_ = q;  // the state as a Vec (its storage reused: nothing allocated per call)
   if (!started_) {
-    rec_.start(qv);
+    rec_.start(qv_);
     started_ = true;
   }
   Advance out;
   for (long k = c0; k < c1; ++k) {
     const long kk = k - c0;
     const double* p_d = P_d == nullptr ? nullptr : P_d + 3 * kk;
-    kinematics(qv);
+    kinematics(qv_);
     task_rows(p_d, R_d == nullptr ? nullptr : R_d + 9 * kk, FF + m0_ * kk);
     if (goals_.count() > 0) {
-      goals_.write(GoalContext{model_, data_, qv}, goal_ref + goals_.ref_size() * kk,
+      goals_.write(GoalContext{model_, data_, qv_}, goal_ref + goals_.ref_size() * kk,
                    goal_ff + goals_.rows() * kk, ext_, m0_);
     }
     if (!objectives_.empty()) {
-      objectives_.compute(model_, data_, qv, ext_.J.topRows(m0_), law_.objective_z());
+      objectives_.compute(model_, data_, qv_, ext_.J.topRows(m0_), law_.objective_z());
     }
     const bool exact = rec_.due(k);
     const int r = crun_ == nullptr
                       ? m_
-                      : m_ + update_constraints(*crun_, k, qv, model_, data_, ext_, law_, exact);
+                      : m_ + update_constraints(*crun_, k, qv_, model_, data_, ext_, law_, exact);
     const double blocked = law_.velocity(ext_, r, qdot_);
     if (speed_.enabled()) {
       if (law_.by_levels()) {
@@ -253,14 +254,14 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
       }
     }
     const Stop why = stop(k, err_stop, r, blocked, at_rest[kk]);
-    observe_limits(t_[k], qv);
+    observe_limits(t_[k], qv_);
     if (exact || why != Stop::none) {
-      const long j = rec_.keep(k, qv, qdot_, data_.oMf[task_.frame].translation(), p_d, err,
+      const long j = rec_.keep(k, qv_, qdot_, data_.oMf[task_.frame].translation(), p_d, err,
                                err_rot);
       if (crun_ != nullptr) record_constraints(*crun_, rec_, j, r - m_);
       if (goals_.count() > 0) rec_.goals(j, goal_norms_);
     }
-    rec_.every_sample(qv, qdot_);
+    rec_.every_sample(qv_, qdot_);
     steps_ = k + 1;
     if (why != Stop::none) {
       out.next = k + 1;
@@ -269,14 +270,14 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
       out.r = r;
       out.err = err_stop;
       // an open run goes on: past a deadlock or a stall as usual; a divergence holds q_k
-      if (t_.is_open() && (why == Stop::deadlock || why == Stop::stall)) step(qv);
-      q = qv;
+      if (t_.is_open() && (why == Stop::deadlock || why == Stop::stall)) step(qv_);
+      q = qv_;
       return out;
     }
-    if (k + 1 < N) step(qv);  // always in an open run (N: LONG_MAX)
+    if (k + 1 < N) step(qv_);  // always in an open run (N: LONG_MAX)
   }
   out.next = c1;
-  q = qv;
+  q = qv_;
   return out;
 }
 

@@ -97,6 +97,7 @@ class TrackingRun {
   double last_error() const { return err_; }
   double last_orientation_error() const { return err_rot_; }  // the primary's rotation rows
   bool is_open() const { return t_.is_open(); }
+  double time(long k) const { return t_[k]; }  // t_k [s]
   long steps() const { return steps_; }
   long kept() const { return rec_.kept(); }
   const ExtendedTask& extended() const { return ext_; }
@@ -135,7 +136,7 @@ class TrackingRun {
   ConstraintRun* crun_;
   Eigen::Matrix<double, 6, Eigen::Dynamic> J6_;
   Eigen::Matrix<double, 6, 1> e6_;
-  Vec qdot_, dq_, qnext_;
+  Vec qdot_, dq_, qnext_, qv_;  // qv_: the state in advance()
   std::vector<int> pos_rows_, rot_rows_;
   int first_goals_ = 0;  // goals in the first level (their errors count in the stop checks)
   bool full_kinematics_ = false;
