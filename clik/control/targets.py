@@ -22,6 +22,8 @@ from clik.trajectory.joint_path import JointReference
 
 
 def _array(value: Any, field: str, expected: str) -> np.ndarray:
+    if value is None:
+        raise InputError(field, expected, "None")
     try:
         return np.asarray(value, dtype=float)
     except (TypeError, ValueError):
@@ -38,6 +40,8 @@ def _pose(task: Any, target: Any, field: str) -> tuple[np.ndarray | None, np.nda
         return target.translation.copy(), target.rotation.copy()
     a = _array(target, field, expected)
     if a.shape == (4, 4):
+        if not np.array_equal(a[3], [0.0, 0.0, 0.0, 1.0]):
+            raise InputError(field, "a 4x4 homogeneous pose (its last row 0 0 0 1)", a[3])
         return a[:3, 3].copy(), a[:3, :3].copy()
     if a.shape == (3,) and not rot_needed:
         return a, None

@@ -151,7 +151,7 @@ def test_bad_targets_are_refused_by_name(engine: str) -> None:
     robot = clik.Robot.load("planar4r")
     task = clik.Task(robot, "tip", "position", axes=["x", "y"])
     ctl = clik.Controller(task, engine=engine, q0=np.radians([180, -30, -90, -30]))
-    for bad in (np.array([np.nan, 0.0, 0.0]), np.zeros(2), np.eye(4)[:3]):  # the engine's path
+    for bad in (np.array([np.nan, 0.0, 0.0]), np.zeros(2), np.eye(4)[:3], np.zeros((4, 4))):
         with pytest.raises(clik.InputError, match=r"targets\['task'\]"):
             ctl.step(bad)
     with pytest.raises(clik.InputError, match=r"targets\['task'\]"):

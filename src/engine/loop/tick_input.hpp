@@ -18,7 +18,7 @@ class TickInput {
     R_.setIdentity();
   }
 
-  // target: n = 16 (a 4x4 pose, row-major), 3 (a position: tasks without orientation rows)
+  // target: n = 16 (a 4x4 homogeneous pose, row-major, last row 0 0 0 1), 3 (a position: tasks without orientation rows)
   // or 9 (a rotation, row-major: tasks without position rows); velocity: vn = 6 (linear,
   // angular), 3 (tasks with one of the two) or 0 (none: zero feed-forward, at rest only
   // while the target stays where it was). False when the target or velocity does not fit
@@ -28,6 +28,9 @@ class TickInput {
     Vec3 p = p_;
     Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R = R_;
     if (n == 16) {
+      if (!(target[12] == 0.0 && target[13] == 0.0 && target[14] == 0.0 && target[15] == 1.0)) {
+        return false;  // not a homogeneous pose (its last row 0 0 0 1)
+      }
       for (int i = 0; i < 3; ++i) {
         p[i] = target[4 * i + 3];
         for (int j = 0; j < 3; ++j) R(i, j) = target[4 * i + j];
