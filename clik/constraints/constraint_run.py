@@ -37,6 +37,7 @@ from clik.tasks.extended_task import ExtendedTask
 
 if TYPE_CHECKING:
     from clik.constraints.constraint_set import ConstraintSet
+    from clik.constraints.obstacle import Obstacle
     from clik.constraints.violations import ViolationMonitor
     from clik.outputs.result import TrackingResult
     from clik.trajectory.clock import Clock
@@ -243,6 +244,14 @@ class ConstraintRun:
         """Every limit the kinds guard that is crossed at this sample, to ``monitor``."""
         for run in self.runs:
             run.observe_limits(tk, monitor)
+
+    def move_obstacle(self, obstacle: Obstacle) -> bool:
+        """An obstacle moved by a controller (from ``t = 0``), in every kind that has it.
+
+        False: no obstacle so named.
+        """
+        moved = [run.move_obstacle(obstacle) for run in self.runs]
+        return any(moved)
 
     def clear(self, j: int) -> None:
         """Empty slot ``j`` of the active set's record (a ring reuses its slots)."""

@@ -37,6 +37,7 @@ if TYPE_CHECKING:
     import pinocchio as pin
 
     from clik.constraints.collision_scene import CollisionScene, SceneRun
+    from clik.constraints.obstacle import Obstacle
     from clik.constraints.violations import ViolationMonitor
     from clik.model.robot import Robot
     from clik.outputs.result import TrackingResult
@@ -225,6 +226,13 @@ class KindRun(ABC):
     @abstractmethod
     def row(self, s: Sample, c: Candidate, out: np.ndarray) -> None:
         """Write candidate ``c``'s row ``j_c`` into ``out`` (nv,); set ``c.error``, ``c.feed``."""
+
+    def move_obstacle(self, obstacle: Obstacle) -> bool:
+        """An obstacle moved by a controller (from ``t = 0``): whether this kind has it.
+
+        The obstacle kind moves it; the others have no obstacles.
+        """
+        return False
 
     def observe_limits(self, tk: float, monitor: ViolationMonitor) -> None:  # noqa: B027
         """Tell ``monitor`` every limit this kind guards that is crossed at this sample."""

@@ -12,12 +12,13 @@ of them.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from clik.constraints.constraint_set import ConstraintSet
+from clik.constraints.obstacle import Obstacle
 from clik.control.targets import by_name, one_sample
 from clik.control.tick import Tick
 from clik.control.ticks import CompiledTicks, PythonTicks
@@ -151,6 +152,7 @@ class Controller:
         self._seen = 0
         self._worst: tuple[str, str] = ("ok", "")
         self._wall = 0.0
+        self._current: dict[str, Obstacle] = {}  # the obstacles moved in this session
         self._previous: tuple[np.ndarray | None, ...] | None = None  # a packed tick's
         self._previous_k = -1  # ... and its index (a tick of the engine's fast path between)
 
@@ -159,7 +161,33 @@ class Controller:
         """The joints the next tick starts from (a copy)."""
         return self._ticks.q.copy()
 
-    def step(self, targets: Any, velocities: Any = None) -> Tick:
+    def move_obstacle(
+        self,
+        name: str,
+        position: Sequence[float] | np.ndarray,
+        rpy: Sequence[float] | None = None,
+        velocity: Sequence[float] | np.ndarray | None = None,
+    ) -> None:
+        """An obstacle moved: at ``position`` [m] at the next tick, then ``velocity``.
+
+        It moves with ``velocity`` [m/s] from then on (default: at rest), rotated by
+        ``rpy`` [rad] (default: as it was).
+
+        Its distances are measured again at the next tick (its certificates dropped).
+
+        Raises:
+            InputError: No obstacle so named, or not three finite numbers.
+        """
+        cset = self._run.cset
+        names = [] if cset is None else [o.name for o in cset.obstacles]
+        if name not in names:
+            raise InputError("obstacles", f"an obstacle's name, one of {names}", name)
+        current = self._current.get(name, cset.obstacles[names.index(name)])  # type: ignore[union-attr]
+        obstacle = current.moved(position, rpy, (0.0, 0.0, 0.0) if velocity is None else velocity)
+        self._current[name] = obstacle
+        self._ticks.move_obstacle(obstacle, obstacle.position, self._run.t[self.k])
+
+    def step(self, targets: Any, velocities: Any = None, obstacles: Any = None) -> Tick:
         """One tick: this tick's targets in, the next joints and a verdict out.
 
         Args:
@@ -175,6 +203,10 @@ class Controller:
                 and the stall check takes the reference as at rest only while every
                 target stays where it was at the previous tick.
 
+            obstacles: Obstacles that moved, by name: a position (3,) [m] (then at rest)
+                or ``(position, velocity)`` [m, m/s]; as :meth:`move_obstacle`, from this
+                tick on.
+
         Returns:
             The tick (:class:`~clik.control.tick.Tick`): ``q`` to command, ``qdot``,
             events, active rows, errors and the verdict.
@@ -182,6 +214,8 @@ class Controller:
         Raises:
             InputError: A missing or malformed target or velocity (named).
         """
+        if obstacles is not None:
+            self._move(obstacles)
         fast = self._fast
         if fast is not None and type(targets) is np.ndarray:  # the engine reads the target
             try:
@@ -202,6 +236,19 @@ class Controller:
                     self._ticks.active() if self._constrained else [], {self._name: (err, err_rot)},
                 )  # fmt: skip
         return self._step(targets, velocities)
+
+    def _move(self, obstacles: Any) -> None:
+        """:meth:`step`'s ``obstacles``: each moved, from this tick on."""
+        if not isinstance(obstacles, Mapping):
+            raise InputError(
+                "obstacles",
+                "a mapping of obstacle name to position or (position, velocity)",
+                obstacles,
+            )
+        for name, value in obstacles.items():
+            pair = isinstance(value, tuple) and len(value) == 2
+            position, velocity = value if pair else (value, None)
+            self.move_obstacle(name, position, velocity=velocity)
 
     def _engine_verdict(self, code: int, tk: float) -> tuple[str, str]:
         """The engine's verdict ``code`` in words, kept if the session's worst."""

@@ -20,6 +20,7 @@ from clik.engine import load
 from clik.loop.compiled_run import CompiledConstraints, engine_run, stopped, synced
 
 if TYPE_CHECKING:
+    from clik.constraints.obstacle import Obstacle
     from clik.loop.tracking import _Run
 
 VERDICT_CODES = ("ok", "deadlock", "violated", "diverged", "off_track")
@@ -101,6 +102,11 @@ class PythonTicks:
         """The limits crossed at time ``tk`` (their violation records)."""
         return [r for r in self.run.monitor.records.values() if r.t_last == tk]
 
+    def move_obstacle(self, obstacle: Obstacle, position: np.ndarray, tk: float) -> None:
+        """Obstacle ``obstacle`` (its new rpy and velocity) at ``position`` at time ``tk``."""
+        assert self.run.crun is not None
+        self.run.crun.move_obstacle(obstacle.moved(position - tk * obstacle.velocity))
+
     def sync(self) -> None:
         """Nothing to bring back: the run is in Python."""
 
@@ -173,6 +179,10 @@ class CompiledTicks(PythonTicks):
         return [
             _record(*v) for v in self.native.violations if v[3] == tk
         ]  # (constraint, kind, t_first, t_last, worst)
+
+    def move_obstacle(self, obstacle: Obstacle, position: np.ndarray, tk: float) -> None:
+        """Obstacle ``obstacle`` (its new rpy and velocity) at ``position`` at time ``tk``."""
+        self.native.move_obstacle(obstacle.name, position, obstacle.velocity, obstacle.rotation)
 
     def sync(self) -> None:
         """The engine's state into the run (before its result is made)."""

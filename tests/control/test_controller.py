@@ -231,3 +231,44 @@ def test_targets_without_velocity_track_with_a_lag(engine: str) -> None:
     for _ in range(300):  # the target held: the lag closes
         tick = ctl.step(targets[-1])
     assert tick.errors["task"][0] <= 1e-6
+
+
+def test_obstacles_moved_tick_by_tick_in_both_engines() -> None:
+    """A ball put beside the hand pushes it off its target; taken away, the hand returns."""
+    from clik.constraints import ConstraintSet, JointLimits, Obstacle
+
+    robot = clik.Robot.load("panda", lock=FINGERS)
+    task = clik.Task(robot, "panda_hand", "position")
+    q0 = robot.q_reference.copy()
+    home = task.placement(q0).translation.copy()
+    ball = Obstacle("ball", "sphere", home + [0.0, 1.0, 0.0], radius=0.03)  # far at first
+    runs = {}
+    for engine in ENGINES:
+        cset = ConstraintSet(
+            robot, obstacles=[ball], obstacle_threshold=0.04, joint_limits=JointLimits(robot)
+        )
+        ctl = clik.Controller(task, gain=100.0, engine=engine, constraints=cset, q0=q0)
+        ticks = []
+        for k in range(1500):
+            moved = None
+            if k == 200:  # 20 cm beside the hand, coming toward it at 0.1 m/s
+                moved = {"ball": (home + [0.0, 0.2, 0.0], np.array([0.0, -0.1, 0.0]))}
+            elif k == 900:  # taken away
+                moved = {"ball": home + [0.0, 1.0, 0.0]}
+            ticks.append(ctl.step(home, obstacles=moved))
+        runs[engine] = (ticks, ctl.result())
+        with pytest.raises(clik.InputError, match="obstacles"):
+            ctl.move_obstacle("wall", [0.0, 0.0, 0.0])
+    ticks, result = runs["compiled"]
+    actions = [(e["action"], e["constraint"]) for e in result.events]
+    assert ("activate", "obstacle:ball:panda_hand") in actions
+    first = next(t.k for t in ticks if t.events)
+    assert 200 < first < 900  # only once the ball was put there and came near
+    assert max(t.errors["task"][0] for t in ticks[200:900]) > 1e-3  # the hand gives way
+    # taken away, its rows are released at once (not held at their threshold: pulled)
+    assert {(e["action"], e["t"]) for e in ticks[900].events} == {("release", 0.9)}
+    assert ticks[-1].errors["task"][0] <= 1e-6 and ticks[-1].verdict == "ok"  # and returns
+    assert result.violations == []  # never inside the ball
+    python, compiled = runs["python"][0], runs["compiled"][0]
+    assert [t.events for t in python] == [t.events for t in compiled]
+    assert max(np.abs(a.q - b.q).max() for a, b in zip(python, compiled, strict=True)) <= 1e-9

@@ -302,4 +302,16 @@ std::vector<std::string> ConstraintRun::skipped_names() const {
   return {names.begin(), names.end()};
 }
 
+bool ConstraintRun::move_obstacle(const std::string& name, const Vec3& position,
+                                  const Vec3& velocity, const Mat3& rotation, double tk) {
+  bool moved = false;
+  for (KindRun& kind : kinds_) {
+    const auto move = [&](auto& k) {
+      return k.move_obstacle(name, position, velocity, rotation, tk);
+    };
+    moved = std::visit(move, kind) || moved;
+  }
+  return moved;
+}
+
 }  // namespace clik

@@ -92,6 +92,11 @@ class ConstraintRun {
   // Every limit the kinds guard that is crossed at this sample, to the monitor.
   void observe_limits(double tk, ViolationMonitor& monitor) const;
 
+  // An obstacle moved by a controller: at `position` at time tk [s], then `velocity`
+  // (every kind is asked; the one that has it moves it). False: no obstacle so named.
+  bool move_obstacle(const std::string& name, const Vec3& position, const Vec3& velocity,
+                     const Mat3& rotation, double tk);
+
   // Keep this sample's active set, witness points and the kinds' records in slot j.
   // ring: slot j was written before (a ring record): its unset entries are reset first.
   void record(int j, bool ring = false);

@@ -147,6 +147,11 @@ struct RecordArray {
 // The optional parts of a kind, doing nothing: a kind derives from it and hides
 // (same name, same signature) what it has.
 struct KindDefaults {
+  // An obstacle moved by a controller (named; pose at time tk [s], velocity): whether
+  // this kind has it (the obstacle kind does).
+  bool move_obstacle(const std::string&, const Vec3&, const Vec3&, const Mat3&, double) {
+    return false;
+  }
   void observe_limits(double, ViolationMonitor&, const std::vector<std::string>&) const {}
   void record(int) {}
   double min_distance() const { return INF; }

@@ -352,6 +352,21 @@ void bind_session(nb::class_<PyTrackingRun>& run) {
                      return s.constraints ? static_cast<long>(s.constraints->events().size()) : 0L;
                    },
                    "The constraint events so far (0 without constraints).")
+      .def(
+          "move_obstacle",
+          [](PyTrackingRun& s, const std::string& name, const Vec3& position,
+             const Vec3& velocity, const Mat3& rotation) {
+            require(position.allFinite() && velocity.allFinite() && rotation.allFinite(),
+                    "move_obstacle: finite position, velocity [m, m/s] and rotation");
+            const double tk = s.run->time(s.next);  // from the next sample on
+            if (!s.constraints ||
+                !s.constraints->move_obstacle(name, position, velocity, rotation, tk)) {
+              throw std::invalid_argument("move_obstacle: no obstacle named '" + name + "'");
+            }
+          },
+          nb::arg("name"), nb::arg("position"), nb::arg("velocity"), nb::arg("rotation"),
+          "Obstacle `name` at `position` [m] at the next sample's time, moving with "
+          "`velocity` [m/s] from then on, rotated by `rotation` (3, 3).")
       .def("events_since", &events_since, nb::arg("i"),
            "Events i.. as (t, constraint, action) tuples (0 <= i <= n_events).")
       .def_prop_ro("active_names",

@@ -14,7 +14,8 @@ constexpr double ROTATION_TOLERANCE = 1e-6;  // max |R^T R - I| and |det R - 1| 
 
 class TickInput {
  public:
-  explicit TickInput(const TaskConfig& task) : task_(task), ff_(TaskVec::Zero(task.rows.size())) {
+  explicit TickInput(const TaskConfig& task)
+      : task_(task), ff_(TaskVec::Zero(static_cast<Eigen::Index>(task.rows.size()))) {
     R_.setIdentity();
   }
 
