@@ -18,6 +18,7 @@ from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
 
 from clik import trajectory
+from clik.control import Controller, Tick
 from clik.engine import check_installed
 from clik.errors import (
     ClikError,
@@ -55,6 +56,7 @@ from clik.tasks.task import Task
 __all__ = [
     "ClikError",
     "ComTask",
+    "Controller",
     "EngineError",
     "ExportError",
     "FrameNotFound",
@@ -81,6 +83,7 @@ __all__ = [
     "SpeedLimits",
     "StabilityWarning",
     "Task",
+    "Tick",
     "Tracker",
     "TrackingResult",
     "UnknownRobotError",

@@ -14,7 +14,19 @@ What is measured (all through clik's public API, on the machine it runs on):
   convex collision geometry and joint-range rows monitored, placed so that no
   obstacle row, or one, is active; and pink's step (:mod:`clik.bench.step_pink`:
   ``FrameTask`` + ``PostureTask``, ``ConfigurationLimit``, ``solve_ik`` +
-  ``integrate_inplace``) on the same model and reference.
+  ``integrate_inplace``) on the same model and reference, and with its collision
+  barrier on the same spheres (``pink_panda_pose_obstacles``).
+- **Tick cost** [us per tick] (:mod:`clik.bench.tick`): one Python call per 1 ms
+  tick on the same Panda circle, timed over the whole per-tick loop:
+  :class:`clik.Controller` (``ctl.step(x_d(t_k), (v_d, w_d)(t_k))``, law (10)),
+  pink (:mod:`clik.bench.tick_pink`) and mink through MuJoCo on the same URDF
+  (:mod:`clik.bench.tick_mink`, :mod:`clik.bench.mujoco_panda`), each given the
+  look-ahead target ``x_d(t_k+1)`` as their examples do; without and with the three
+  spheres (clik's obstacle rows, pink's ``SelfCollisionBarrier`` on the spheres
+  added to its collision model, :mod:`clik.bench.pink_barrier`; mink's
+  ``CollisionAvoidanceLimit``). Every line's recorded joints go through one check
+  (:mod:`clik.bench.tick_quality`): pose errors, clearance to the spheres (coal),
+  joint speed over the URDF limits.
 - **Zoo obstacle run** [us per sample] (:mod:`clik.bench.step_zoo`): the zoo test's
   run (:mod:`clik.bench.zoo`: every robot, a 5 cm line toward a 3 cm sphere, law (10),
   joint-range rows) in the compiled engine, robot by robot; the median over robots
@@ -43,7 +55,8 @@ engine's median from the same rounds.
 
 The targets each figure is compared with are data, ``targets.toml`` beside this
 file (:mod:`clik.bench.targets`). :func:`clik.bench.suite.run_bench` writes
-``out/bench.json`` and ``out/bench.md`` (:mod:`clik.bench.report`); pink
-(``pip install clik[bench]``) is optional: without it its lines are ``null``.
+``out/bench.json`` and ``out/bench.md`` (:mod:`clik.bench.report`); pink, mink and
+MuJoCo (``pip install clik[bench]``) are optional: without one, its lines are
+``null``, the log and ``bench.md`` say why, and its targets are neither met nor missed.
 ``python -m clik.bench --out DIR [--quick]`` runs it from a shell.
 """

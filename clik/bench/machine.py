@@ -55,7 +55,9 @@ def cpu_seconds() -> float:
 def versions() -> dict[str, str | None]:
     """Versions of clik and of the packages it is compared with or built on."""
     out: dict[str, str | None] = {}
-    for name in ("clik", "pin", "coal", "numpy", "pin-pink", "qpsolvers", "daqp", "quadprog"):
+    names = ("clik", "pin", "coal", "numpy", "pin-pink", "mink", "mujoco", "qpsolvers", "daqp",
+             "quadprog")  # fmt: skip
+    for name in names:
         try:
             out[name] = importlib.metadata.version(name)
         except importlib.metadata.PackageNotFoundError:

@@ -4,27 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
+from clik.bench.cells import fmt
+from clik.bench.report_ticks import tick_section
 from clik.bench.stats import ratio
-
-
-def fmt(value: Any, digits: int = 3) -> str:
-    """A table cell: ``-`` for None, yes / **no** for booleans, ``digits`` significant digits.
-
-    Args:
-        value: The figure.
-        digits: Significant digits of a float.
-    """
-    if value is None:
-        return "-"
-    if isinstance(value, bool):
-        return "yes" if value else "**no**"
-    if isinstance(value, int | np.integer):
-        return str(int(value))
-    if isinstance(value, float | np.floating):
-        return f"{value:.{digits}g}"
-    return str(value)
 
 
 def header(report: dict[str, Any]) -> list[str]:
@@ -46,7 +28,9 @@ def header(report: dict[str, Any]) -> list[str]:
         f"load {m.get('load_average_1min_start', '-')} at start, CPU share "
         f"{m.get('cpu_share', '-')}{busy} (the bench's CPU time over its wall time). "
         f"clik {v['clik']}, pin {v['pin']}, coal {v['coal']}, numpy {v['numpy']}, "
-        f"pink {v['pin-pink'] or '-'} ({report['pink']['solver'] or 'not run'}).",
+        f"pink {v['pin-pink'] or '-'} ({report['pink']['solver'] or 'not run'}), "
+        f"mink {v.get('mink') or '-'} on MuJoCo {v.get('mujoco') or '-'} "
+        f"({report['mink']['solver'] or 'not run'}).",
     ]
 
 
@@ -66,14 +50,16 @@ def step_section(report: dict[str, Any]) -> list[str]:
         f"## Step cost [us per sample] (medians over {report['config']['rounds']} interleaved "
         "rounds of whole runs)",
         "",
-        "| line | engine | median | p10 | p90 | pink / this | python / compiled | "
+        "| line | engine | median | p10 | p90 | pink / this (with its barrier on obstacle "
+        "lines) | python / compiled | "
         "real-time factor | law | status | max task error | active rows (mean) |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    pink_median = report["step_us"]["pink_panda_pose"]
     python_ratio = report["ratios"]["python_over_compiled_steps"]
     for name, s in report["steps"].items():
         engine = _engine_of(name, s)
+        pink_line = "pink_panda_pose" + ("_obstacles" if "obstacles" in name else "")
+        pink_median = report["step_us"][pink_line]
         pink_ratio = None if engine == "pink" else ratio(pink_median, s["median_us"])
         lines.append(
             f"| {name} | {engine} | {s['median_us']:.2f} | {s['p10_us']:.2f} | "
@@ -122,7 +108,7 @@ def ratios_section(report: dict[str, Any]) -> list[str]:
     r = report["ratios"]
     rows = (
         ("pink / compiled, Panda pose step", r["pink_over_panda_pose"]),
-        ("pink / compiled, Panda pose step with obstacles (1 row active)",
+        ("pink with its barrier / compiled, Panda pose step with obstacles (1 row active)",
          r["pink_over_panda_pose_obstacles"]),
         ("python / compiled, Panda pose step", r["python_over_panda_pose"]),
         ("pink solve / clik solve (compiled)", r["pink_over_solve"]),
@@ -230,6 +216,7 @@ def markdown(report: dict[str, Any]) -> str:
     lines = [
         *header(report),
         *step_section(report),
+        *tick_section(report),
         *zoo_section(report),
         *solve_section(report),
         *ratios_section(report),

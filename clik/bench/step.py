@@ -7,17 +7,18 @@ every round, so a busy moment of the machine hits every line alike.
 from __future__ import annotations
 
 import gc
+from collections.abc import Sequence
 from typing import Any
 
-from clik.bench.config import DT, BenchConfig, Log
+from clik.bench.config import BenchConfig, Log
 from clik.bench.pink_backend import Pink
-from clik.bench.stats import stats
+from clik.bench.stats import line_timing
 from clik.bench.step_lines import step_variants
 from clik.bench.step_variant import Variant
 
 
 def interleaved_rounds(
-    variants: list[Variant], rounds: int, log: Log
+    variants: Sequence[Variant], rounds: int, log: Log, label: str = "step"
 ) -> tuple[dict[str, list[float]], dict[str, dict[str, Any]], dict[str, int]]:
     """Warm up every variant, then run each once per round in a rotating order.
 
@@ -25,6 +26,7 @@ def interleaved_rounds(
         variants: The lines.
         rounds: Rounds after the warm-up.
         log: Called once per round.
+        label: What the round's log line calls the lines (``step``, ``tick``).
 
     Returns:
         Per line: the cost of every round [us per step], the last run's info and its steps.
@@ -36,12 +38,12 @@ def interleaved_rounds(
     steps_of: dict[str, int] = {}
     for r in range(rounds):
         shift = r % len(variants)
-        for v in variants[shift:] + variants[:shift]:
+        for v in [*variants[shift:], *variants[:shift]]:
             gc.collect()
             steps, wall, info = v.run()
             samples[v.name].append(1e6 * wall / max(steps, 1))
             infos[v.name], steps_of[v.name] = info, steps
-        log(f"  step round {r + 1}/{rounds}")
+        log(f"  {label} round {r + 1}/{rounds}")
     return samples, infos, steps_of
 
 
@@ -62,16 +64,8 @@ def bench_steps(config: BenchConfig, pink: Pink | None, log: Log) -> dict[str, A
     samples, infos, steps_of = interleaved_rounds(variants, config.rounds, log)
     out: dict[str, Any] = {}
     for v in variants:
-        s = stats(samples[v.name])
         out[v.name] = {
-            "description": v.description,
-            "median_us": s["median"],
-            "p10_us": s["p10"],
-            "p90_us": s["p90"],
-            "min_us": s["min"],
-            "runs": s["n"],
-            "steps_per_run": steps_of[v.name],
-            "realtime_factor": DT / (1e-6 * s["median"]),
+            **line_timing(v.description, samples[v.name], "steps_per_run", steps_of[v.name]),
             **infos[v.name],
         }
     return out

@@ -13,6 +13,7 @@ import numpy as np
 import clik
 from clik.bench.config import DT, BenchConfig
 from clik.bench.pink_backend import Pink
+from clik.bench.pink_barrier import pink_obstacles
 from clik.bench.step_dual_arm import dual_arm_variants
 from clik.bench.step_pink import pink_step_variant
 from clik.bench.step_variant import Variant, clik_variant
@@ -249,14 +250,22 @@ def panda_variants(panda: PandaSetup, engine: str = "compiled") -> list[Variant]
 
 
 def pink_variants(pink: Pink, panda: PandaSetup) -> list[Variant]:
-    """The two Panda lines of pink: configuration limits alone, and its default limits.
+    """The Panda lines of pink: configuration limits, its default limits, and the spheres.
+
+    The third is the first with its collision barrier on :data:`OBSTACLES_ONE_ACTIVE`
+    (:mod:`clik.bench.pink_barrier`).
 
     Args:
         pink: The installed pink and its QP solver.
         panda: The Panda setup.
     """
     args = (pink, panda.robot, panda.task, panda.trajectory, panda.q0)
-    return [pink_step_variant(*args), pink_step_variant(*args, default_limits=True)]
+    spheres = pink_obstacles(panda.robot, OBSTACLES_ONE_ACTIVE, OBSTACLE_RADIUS)
+    return [
+        pink_step_variant(*args),
+        pink_step_variant(*args, default_limits=True),
+        pink_step_variant(*args, obstacles=spheres),
+    ]
 
 
 def step_variants(config: BenchConfig, pink: Pink | None) -> list[Variant]:

@@ -18,6 +18,7 @@ from clik.bench.case_study import bench_case_study
 from clik.bench.config import FULL, QUICK, BenchConfig, Log
 from clik.bench.machine import cpu_seconds, machine_info, versions
 from clik.bench.memory import bench_memory
+from clik.bench.mink_backend import Mink, find_mink
 from clik.bench.pink_backend import Pink, find_pink
 from clik.bench.report import markdown
 from clik.bench.solve import bench_solve
@@ -27,6 +28,7 @@ from clik.bench.step_lines import line_name
 from clik.bench.step_zoo import bench_zoo
 from clik.bench.sweep_rate import bench_sweep
 from clik.bench.targets import evaluate_targets, load_targets
+from clik.bench.tick import TICK_LINES, bench_ticks
 from clik.outputs.io import atomic_write, check_out_path, output_errors, write_json
 
 REQUIRED_KEYS = (
@@ -35,6 +37,7 @@ REQUIRED_KEYS = (
     "step_us.panda_pose_obstacles",
     "step_us.python_panda_pose",
     "step_us.pink_panda_pose",
+    "step_us.pink_panda_pose_obstacles",
     "step_us.zoo_obstacle_median",
     "zoo.robots_timed",
     "ratios.pink_over_panda_pose",
@@ -50,8 +53,12 @@ REQUIRED_KEYS = (
     "memory_growth_mb.full",
     "sweep_runs_per_s.1_worker",
     "sweep_runs_per_s.2_workers",
+    *(f"tick_us.{line}" for line in TICK_LINES),
+    *(f"tick_quality.{line}" for line in TICK_LINES),
+    "tick_error_m.panda_pose",
 )
-"""Dotted key paths ``bench.json`` always holds (pink's are ``null`` without pink)."""
+"""Dotted key paths ``bench.json`` always holds (pink's and mink's are ``null`` without
+them)."""
 
 CLIK_STEP_US = {
     "planar4r": "planar4r",
@@ -72,6 +79,7 @@ STEP_US = {
     **{line_name(key, "python"): line_name(line, "python") for key, line in CLIK_STEP_US.items()},
     "pink_panda_pose": "pink_panda_pose",
     "pink_panda_pose_default_limits": "pink_panda_pose_default_limits",
+    "pink_panda_pose_obstacles": "pink_panda_pose_obstacles",
     "pink_dual_arm": "pink_dual_arm",
 }
 """``bench.json``'s ``step_us`` keys and the step line whose median each is: clik's
@@ -90,6 +98,7 @@ class Measured:
         memory: Memory (:func:`~clik.bench.memory.bench_memory`).
         sweep: Sweep (:func:`~clik.bench.sweep_rate.bench_sweep`).
         zoo: The zoo's obstacle run (:func:`~clik.bench.step_zoo.bench_zoo`).
+        ticks: Per tick line (:func:`~clik.bench.tick.bench_ticks`).
     """
 
     steps: dict[str, Any]
@@ -98,18 +107,22 @@ class Measured:
     memory: dict[str, Any]
     sweep: dict[str, Any]
     zoo: dict[str, Any]
+    ticks: dict[str, Any]
 
 
-def measure(config: BenchConfig, pink: Pink | None, say: Log) -> Measured:
+def measure(config: BenchConfig, pink: Pink | None, mink: Mink | None, say: Log) -> Measured:
     """Run every measurement of the suite, in order.
 
     Args:
         config: Sizes of the suite.
         pink: The installed pink, or None to leave its lines out.
+        mink: The installed mink, or None to leave its lines out.
         say: Progress callback.
     """
     say("step cost (interleaved rounds)")
     steps = bench_steps(config, pink, say)
+    say("tick cost: one Python call per 1 ms tick (interleaved rounds)")
+    ticks = bench_ticks(config, pink, mink, say)
     say("step cost of the zoo's obstacle run, robot by robot")
     zoo = bench_zoo(config, say)
     say("single-pose solve")
@@ -120,7 +133,7 @@ def measure(config: BenchConfig, pink: Pink | None, say: Log) -> Measured:
     memory = bench_memory(config, say)
     say("sweep on a local Dask cluster, 1 and 2 workers")
     sweep = bench_sweep(config, say)
-    return Measured(steps, solve, case, memory, sweep, zoo)
+    return Measured(steps, solve, case, memory, sweep, zoo, ticks)
 
 
 def step_ratios(m: Measured) -> dict[str, Any]:
@@ -141,7 +154,7 @@ def step_ratios(m: Measured) -> dict[str, Any]:
     return {
         "pink_over_panda_pose": ratio(median("pink_panda_pose"), median("panda_pose")),
         "pink_over_panda_pose_obstacles": ratio(
-            median("pink_panda_pose"), median("panda_pose_obstacles_1_active")
+            median("pink_panda_pose_obstacles"), median("panda_pose_obstacles_1_active")
         ),
         "python_over_panda_pose": ratio(median("python_panda_pose"), median("panda_pose")),
         "pink_over_solve": m.solve.get("speedup_vs_pink"),
@@ -149,6 +162,39 @@ def step_ratios(m: Measured) -> dict[str, Any]:
         "python_over_compiled_steps": {
             line: ratio(median(line_name(line, "python")), median(line))
             for line in dict.fromkeys(CLIK_STEP_US.values())
+        },
+    }
+
+
+def tick_figures(m: Measured) -> dict[str, Any]:
+    """The tick lines: medians, quality, clik's final error and the peers' ratios.
+
+    Args:
+        m: What the measurements returned.
+
+    Returns:
+        ``tick_us`` and ``tick_quality`` (every line of
+        :data:`~clik.bench.tick.TICK_LINES`, None when its library is missing),
+        ``tick_error_m.panda_pose`` (clik's position error at its last tick [m]),
+        ``ticks`` (each line's statistics and info) and ``tick_ratios`` (pink's and
+        mink's medians over clik's).
+    """
+
+    def median(line: str) -> float | None:
+        return m.ticks[line]["median_us"] if line in m.ticks else None
+
+    return {
+        "tick_us": {line: median(line) for line in TICK_LINES},
+        "tick_quality": {line: m.ticks.get(line, {}).get("quality") for line in TICK_LINES},
+        "tick_error_m": {"panda_pose": m.ticks["panda_pose"]["final_error_m"]},
+        "ticks": {
+            line: {key: value for key, value in figures.items() if key != "quality"}
+            for line, figures in m.ticks.items()
+        },
+        "tick_ratios": {
+            f"{peer}_over_{line}": ratio(median(f"{peer}_{line}"), median(line))
+            for peer in ("pink", "mink")
+            for line in ("panda_pose", "panda_pose_obstacles")
         },
     }
 
@@ -189,6 +235,7 @@ def figures(config: BenchConfig, m: Measured) -> dict[str, Any]:
             "2_workers": m.sweep["runs_per_s_2_workers"],
         },
         "sweep": m.sweep,
+        **tick_figures(m),
     }
 
 
@@ -219,6 +266,10 @@ def run_bench(
     with output_errors(out):
         out.mkdir(parents=True, exist_ok=True)
     pink, why_not = find_pink()
+    mink, why_not_mink = find_mink()
+    for peer, reason in (("pink", why_not), ("mink", why_not_mink)):
+        if reason is not None:
+            say(f"{peer} skipped, its lines left out: {reason}")
     report: dict[str, Any] = {
         "quick": quick,
         "config": asdict(config),
@@ -229,10 +280,15 @@ def run_bench(
             "available": pink is not None,
             "reason": why_not,
         },
+        "mink": {
+            "solver": None if mink is None else mink.solver,
+            "available": mink is not None,
+            "reason": why_not_mink,
+        },
     }
     started = time.perf_counter()
     cpu_started = cpu_seconds()
-    report.update(figures(config, measure(config, pink, say)))
+    report.update(figures(config, measure(config, pink, mink, say)))
     report["targets"] = evaluate_targets(report, target_list)
     report["bench_wall_time_s"] = time.perf_counter() - started
     # Below 1, other processes took the CPU during the bench: figures are inflated.

@@ -32,12 +32,15 @@ import numpy as np
 import pinocchio as pin
 
 from clik.constraints.kind import Candidate, KindRun, RunSetup, Sample
+from clik.outputs.ring import unrolled
 from clik.tasks.extended_task import ExtendedTask
 
 if TYPE_CHECKING:
     from clik.constraints.constraint_set import ConstraintSet
+    from clik.constraints.obstacle import Obstacle
     from clik.constraints.violations import ViolationMonitor
     from clik.outputs.result import TrackingResult
+    from clik.trajectory.clock import Clock
 
 LawFunction = Callable[[int, np.ndarray], Any]
 """``law(r, out)``: the law's joint velocity on the first ``r`` rows of the extended task."""
@@ -77,7 +80,7 @@ class ConstraintRun:
         m: int,
         law: str,
         alpha: float,
-        t: np.ndarray,
+        t: np.ndarray | Clock,
         n_rec: int,
         frame_id: int = -1,
         task_rows: np.ndarray | None = None,
@@ -242,6 +245,19 @@ class ConstraintRun:
         for run in self.runs:
             run.observe_limits(tk, monitor)
 
+    def move_obstacle(self, obstacle: Obstacle) -> bool:
+        """An obstacle moved by a controller (from ``t = 0``), in every kind that has it.
+
+        False: no obstacle so named.
+        """
+        moved = [run.move_obstacle(obstacle) for run in self.runs]
+        return any(moved)
+
+    def clear(self, j: int) -> None:
+        """Empty slot ``j`` of the active set's record (a ring reuses its slots)."""
+        self.rec_active[j] = -1
+        self.rec_witness[j] = np.nan
+
     def record(self, j: int) -> None:
         """Keep this sample's active set, witness points and the kinds' records in slot ``j``."""
         for run in self.runs:
@@ -275,14 +291,17 @@ class ConstraintRun:
             "kinds": [run.records(n_rec) for run in self.runs],
         }
 
-    def finish(self, result: TrackingResult, n_rec: int) -> None:
-        """Move the run's records into the result."""
-        finish_constraints(self.cset, self.records(n_rec), result, n_rec)
+    def finish(
+        self, result: TrackingResult, n_rec: int, ring: tuple[int, int] | None = None
+    ) -> None:
+        """Move the run's records into the result (``ring``: see :func:`finish_constraints`)."""
+        finish_constraints(self.cset, self.records(n_rec), result, n_rec, ring)
 
 
 def finish_constraints(
-    cset: ConstraintSet, records: dict[str, Any], result: TrackingResult, n_rec: int
-) -> None:
+    cset: ConstraintSet, records: dict[str, Any], result: TrackingResult, n_rec: int,
+    ring: tuple[int, int] | None = None,
+) -> None:  # fmt: skip
     """A run's constraint records (either engine's) into its result and summary.
 
     Args:
@@ -291,7 +310,12 @@ def finish_constraints(
             (in the set's order) ``kinds``, as :meth:`ConstraintRun.records` gives them.
         result: The result to fill.
         n_rec: Samples recorded.
+        ring: ``(kept, capacity)`` of a ring record (a controller's): its per-sample
+            arrays are unrolled, oldest first, and ``n_rec`` is what it holds.
     """
+    if ring is not None:
+        records = unrolled(records, *ring)
+        n_rec = min(ring)
     result.events = list(records["events"])
     result.info["constraint_names"] = list(records["constraint_names"])
     result.info["links"] = cset.link_labels

@@ -19,7 +19,6 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
-import pinocchio as pin
 
 from clik.bounds import in_range
 from clik.constraints.collision_scene import (
@@ -31,7 +30,7 @@ from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits, robot_limit_rows
 from clik.constraints.kind import ConstraintKind
 from clik.constraints.link_pairs import LinkPairs
-from clik.constraints.obstacle import Obstacle, read_only_vector3
+from clik.constraints.obstacle import Obstacle
 from clik.constraints.obstacle_avoidance import ObstacleAvoidance
 from clik.constraints.read_only import ReadOnlyList
 from clik.errors import InputError
@@ -320,15 +319,7 @@ class ConstraintSet:
         if name not in names:
             raise InputError("obstacle", f"one of {names}", name)
         i = names.index(name)
-        ob = self.obstacles[i]
-        moved = Obstacle.__new__(Obstacle)
-        moved.__dict__.update(ob.__dict__)
-        for key, value in (("position", position), ("rpy", rpy), ("velocity", velocity)):
-            if value is not None:
-                setattr(moved, key, read_only_vector3(value, f"obstacles.{name}.{key}"))
-        if rpy is not None:
-            moved.rotation = pin.rpy.rpyToMatrix(*moved.rpy)
-            moved.rotation.flags.writeable = False
+        moved = self.obstacles[i].moved(position, rpy, velocity)
         kind = self._obstacle_kind.moved(i, moved)
         assert self.scene is not None
         self.scene = self.scene.moved(i, moved)

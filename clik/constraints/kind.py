@@ -37,9 +37,11 @@ if TYPE_CHECKING:
     import pinocchio as pin
 
     from clik.constraints.collision_scene import CollisionScene, SceneRun
+    from clik.constraints.obstacle import Obstacle
     from clik.constraints.violations import ViolationMonitor
     from clik.model.robot import Robot
     from clik.outputs.result import TrackingResult
+    from clik.trajectory.clock import Clock
 
 
 CHECK_TOLERANCE = 1e-12
@@ -130,7 +132,7 @@ class RunSetup:
     robot: Robot
     m: int
     law: str
-    t: np.ndarray
+    t: np.ndarray | Clock
     n_rec: int
     frame_id: int
     task_rows: np.ndarray
@@ -224,6 +226,13 @@ class KindRun(ABC):
     @abstractmethod
     def row(self, s: Sample, c: Candidate, out: np.ndarray) -> None:
         """Write candidate ``c``'s row ``j_c`` into ``out`` (nv,); set ``c.error``, ``c.feed``."""
+
+    def move_obstacle(self, obstacle: Obstacle) -> bool:
+        """An obstacle moved by a controller (from ``t = 0``): whether this kind has it.
+
+        The obstacle kind moves it; the others have no obstacles.
+        """
+        return False
 
     def observe_limits(self, tk: float, monitor: ViolationMonitor) -> None:  # noqa: B027
         """Tell ``monitor`` every limit this kind guards that is crossed at this sample."""

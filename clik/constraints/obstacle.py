@@ -159,6 +159,30 @@ class Obstacle:
         """True when the obstacle has a non-zero velocity."""
         return bool(np.any(self.velocity != 0.0))
 
+    def moved(
+        self,
+        position: Sequence[float] | np.ndarray | None = None,
+        rpy: Sequence[float] | None = None,
+        velocity: Sequence[float] | np.ndarray | None = None,
+    ) -> Obstacle:
+        """This obstacle (its geometry shared) with a new position, rpy or velocity.
+
+        The position [m] is at ``t = 0``, rpy [rad], velocity [m/s]; each is checked
+        (three finite numbers) and read-only.
+
+        Raises:
+            InputError: Not three finite numbers (``obstacles.<name>.<field>``).
+        """
+        out = Obstacle.__new__(Obstacle)
+        out.__dict__.update(self.__dict__)
+        for key, value in (("position", position), ("rpy", rpy), ("velocity", velocity)):
+            if value is not None:
+                setattr(out, key, read_only_vector3(value, f"obstacles.{self.name}.{key}"))
+        if rpy is not None:
+            out.rotation = pin.rpy.rpyToMatrix(*out.rpy)
+            out.rotation.flags.writeable = False
+        return out
+
     def __repr__(self) -> str:
         return f"Obstacle({self.name!r}, {self.shape!r}, position={self.position.tolist()})"
 

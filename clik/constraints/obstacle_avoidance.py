@@ -236,6 +236,7 @@ class ObstacleRun(KindRun):
         self.run_min = np.full(n_obs, np.inf)
         self.run_min_link = [-1] * n_obs
         self.run_min_t = np.zeros(n_obs)
+        self._moved = np.zeros(n_obs, dtype=bool)  # moved since the last sample
         self.rec_dist = np.full((n_rec, n_obs), np.inf)
         self.rec_link = np.full((n_rec, n_obs), -1, dtype=np.int16)
         self._local = pin.SE3.Identity()  # a witness point in its joint's frame (row)
@@ -249,6 +250,7 @@ class ObstacleRun(KindRun):
         self._lb = np.full((scene.n_links, n_obs), -np.inf)  # unknown at the start
         self._evaluated = np.zeros((scene.n_links, n_obs), dtype=bool)
         self._near = np.zeros((scene.n_links, n_obs), dtype=bool)
+        self.dt = setup.dt
         speed = np.linalg.norm(kind.velocities, axis=1) * setup.dt
         self._obs_step = speed[None, :] if np.any(speed > 0.0) else None
         self._obs_index = np.arange(n_obs)
@@ -280,7 +282,10 @@ class ObstacleRun(KindRun):
                 c = self._candidate(int(i), int(o))
                 lb[i, o] = self._pairs[c.item][0]
                 evaluated[i, o] = True
-                if kind.rows and (lb[i, o] < c.threshold or c.key in s.active_keys):
+                # an active pair stays a candidate, unless its obstacle was just moved and
+                # it is beyond its threshold: released (a jump must not pull the link after it)
+                held = c.key in s.active_keys and not self._moved[o]
+                if kind.rows and (lb[i, o] < c.threshold or held):
                     out.append(c)
             nearest = lb.argmin(axis=0)
             dist_o = lb[nearest, obs_index]
@@ -288,6 +293,7 @@ class ObstacleRun(KindRun):
             if not unsure.any():
                 break
             todo = [(int(nearest[o]), int(o)) for o in np.flatnonzero(unsure)]
+        self._moved[:] = False  # a move counts for one sample
         self.dist_o = dist_o
         self.exact_o = evaluated[nearest, obs_index]
         self.link_o[:] = nearest
@@ -298,6 +304,27 @@ class ObstacleRun(KindRun):
             self.run_min[j] = exact_d[j]
             self.run_min_t[j] = s.tk
             self.run_min_link[j] = int(nearest[j])
+
+    def move_obstacle(self, obstacle: Obstacle) -> bool:
+        """The obstacle so named, moved (from ``t = 0``); its certificates dropped.
+
+        False: this kind has no obstacle so named.
+        """
+        names = [o.name for o in self.kind.obstacles]
+        if obstacle.name not in names:
+            return False
+        o = names.index(obstacle.name)
+        self.kind = self.kind.moved(o, obstacle)
+        if self.scene is None or self.geometry is None:
+            return True
+        speed = np.linalg.norm(self.kind.velocities, axis=1) * self.dt
+        self._obs_step = speed[None, :] if np.any(speed > 0.0) else None
+        self._lb[:, o] = -np.inf
+        self._moved[o] = True
+        g = self.scene.obstacle_geom[o]
+        self.geometry.moving = [(h, ob) for h, ob in self.geometry.moving if h != g]
+        self.geometry.moving.append((g, obstacle))
+        return True
 
     def _candidate(self, i: int, o: int) -> Candidate:
         """Distance, witness points and error of link geometry ``i`` and obstacle ``o``."""

@@ -105,6 +105,8 @@ class ViolationMonitor:
     def __init__(self, joints: JointRange) -> None:
         self.joints = joints
         self.records: dict[str, ViolationRecord] = {}
+        self.notes = 0
+        """Limits crossed so far, counted at every sample (a controller's ``violated``)."""
         self._low = joints.lower - JOINT_TOLERANCE
         self._high = joints.upper + JOINT_TOLERANCE
 
@@ -136,6 +138,7 @@ class ViolationMonitor:
         self._note(key, kind, t, excess)
 
     def _note(self, key: str, kind: str, t: float, excess: float) -> None:
+        self.notes += 1
         rec = self.records.get(key)
         if rec is None:
             self.records[key] = ViolationRecord(key, kind, t, float(excess))

@@ -17,6 +17,7 @@ from clik.constraints.constraint_run import finish_constraints
 from clik.constraints.violations import ViolationRecord
 from clik.engine import load
 from clik.loop.stop_checks import instability_reason, joint_step_reason, non_finite_reason
+from clik.trajectory.clock import Clock
 
 if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
@@ -37,9 +38,9 @@ class RunState(Protocol):
     task: Task
     tr: Any
     cset: ConstraintSet | None
-    t: np.ndarray
+    t: Any
     N: int
-    chunks: ReferenceChunks
+    chunks: ReferenceChunks | None
     rec: Recorder
     ext: ExtendedTask
     checks: StopChecks
@@ -64,15 +65,16 @@ def compiled_samples(run: RunState, q: np.ndarray) -> tuple[str, str]:
     Sets ``run.steps``, ``run.max_err`` and ``run.err``, the record, the violations
     and the stability margin, as :meth:`clik.loop.tracking._Run.samples` does.
     """
-    native = _engine_run(run)
+    native = engine_run(run)
     q = np.array(q, dtype=float)
     N = run.N
     tick = max(1, N // 100) if run.progress is not None else N
     k = 0
     stop: tuple[Any, ...] = ("",)
-    goals = run.goals
+    goals, chunks = run.goals, run.chunks
+    assert chunks is not None  # an offline run (a controller ticks its own)
     while k < N:
-        c0, c1, P_d, R_d, FF, at_rest = run.chunks.load(k - k % run.chunks.size)
+        c0, c1, P_d, R_d, FF, at_rest = chunks.load(k - k % chunks.size)
         G_ref, G_ff, at_rest = goals.load(c0, at_rest)
         end = min(c1, (k // tick + 1) * tick)
         a, b = k - c0, end - c0
@@ -88,6 +90,15 @@ def compiled_samples(run: RunState, q: np.ndarray) -> tuple[str, str]:
             break
         if run.progress is not None and k < N:
             run.progress(k, N)
+    synced(run, native)
+    if not stop[1]:
+        return "completed", f"reached the end of the trajectory at t = {run.t[-1]:.6g} s"
+    return stopped(run, native, stop)
+
+
+def synced(run: RunState, native: Any) -> None:
+    """The engine's run state into ``run``: counts, errors, record, violations, constraints."""
+    goals = run.goals
     run.steps, run.max_err, run.err = native.steps, native.max_error, native.last_error
     if goals.rows is not None:
         goals.rows.largest[:] = native.goal_max
@@ -100,9 +111,6 @@ def compiled_samples(run: RunState, q: np.ndarray) -> tuple[str, str]:
         run.monitor.records[constraint] = record
     if run.cset is not None:
         run.crun = CompiledConstraints(run.cset, native.constraint_records())
-    if not stop[1]:
-        return "completed", f"reached the end of the trajectory at t = {run.t[-1]:.6g} s"
-    return _stopped(run, native, stop)
 
 
 def _rows(array: np.ndarray | None, a: int, b: int) -> np.ndarray | None:
@@ -110,10 +118,16 @@ def _rows(array: np.ndarray | None, a: int, b: int) -> np.ndarray | None:
     return None if array is None else np.ascontiguousarray(array[a:b])
 
 
-def _engine_run(run: RunState) -> Any:
-    """The engine's run, on the run's robot, task, law, checks and record (typed configs)."""
+def engine_run(run: RunState) -> Any:
+    """The engine's run, on the run's robot, task, law, checks and record (typed configs).
+
+    An open run (a controller's: its times a :class:`~clik.loop.clock.Clock`, its record
+    a ring) is built open: ``t`` None, ``t0`` its first time.
+    """
     engine, tr = load(), run.tr
     more: dict[str, Any] = {}
+    if isinstance(run.t, Clock):
+        more["t0"] = run.t.t0
     if run.goals.rows is not None:
         more["goals"] = [g.task.engine_goal(engine) for g in tr.stack.extras]
     return engine.TrackingRun(
@@ -121,7 +135,7 @@ def _engine_run(run: RunState) -> Any:
         task=_task_config(engine, run.task),
         law=_law_config(engine, tr, run.goals),
         stop=_stop_config(engine, run.checks.s),
-        t=run.t,
+        t=None if isinstance(run.t, Clock) else run.t,
         record=_record_arrays(engine, run.rec, run.goals),
         joints=_joint_monitor_config(engine, run.monitor.joints),
         constraints=None if run.cset is None else run.cset.engine_config(),
@@ -181,7 +195,9 @@ def _stop_config(engine: Any, s: StopSettings) -> Any:
 
 def _record_arrays(engine: Any, rec: Recorder, goals: Any) -> Any:
     """The Recorder's own arrays (written in place) as ``_engine.RecordArrays``."""
-    more = {} if goals.rows is None else {"goal_error": goals.rows.record}
+    more: dict[str, Any] = {} if goals.rows is None else {"goal_error": goals.rows.record}
+    if rec.ring:
+        more["ring"] = True
     return engine.RecordArrays(**more,
         N=rec.N, every=rec.every, idx=rec.idx, q=rec.q, qdot=rec.qdot, qddot=rec.qddot,
         position=rec.position, reference=rec.reference, error=rec.error,
@@ -200,7 +216,7 @@ def _joint_monitor_config(engine: Any, joints: JointRange) -> Any:
     )
 
 
-def _stopped(run: RunState, native: Any, stop: tuple[Any, ...]) -> tuple[str, str]:
+def stopped(run: RunState, native: Any, stop: tuple[Any, ...]) -> tuple[str, str]:
     """The status and reason of a run the engine stopped at sample ``k``."""
     _, why, k, r, err = stop
     tk = float(run.t[k])
@@ -251,6 +267,8 @@ class CompiledConstraints:
         """Constraints that were violated but found no free row."""
         return list(self.records["skipped"])
 
-    def finish(self, result: TrackingResult, n_rec: int) -> None:
+    def finish(
+        self, result: TrackingResult, n_rec: int, ring: tuple[int, int] | None = None
+    ) -> None:
         """Move the run's records into the result, as ``ConstraintRun.finish`` does."""
-        finish_constraints(self.cset, self.records, result, n_rec)
+        finish_constraints(self.cset, self.records, result, n_rec, ring)

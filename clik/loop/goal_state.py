@@ -28,7 +28,8 @@ class GoalState:
     Args:
         tracker: The run's tracker (its ``stack``, ``objectives``, ``leveled``, ``task``).
         t: The run's time grid [s].
-        size: Samples per reference chunk.
+        size: Samples per reference chunk (None: an open run, its references given
+            sample by sample).
         capacity: The record's samples.
         q0: The run's start (a posture objective's default posture).
 
@@ -41,11 +42,11 @@ class GoalState:
     """
 
     def __init__(
-        self, tracker: Any, t: np.ndarray, size: int, capacity: int, q0: np.ndarray | None
+        self, tracker: Any, t: Any, size: int | None, capacity: int, q0: np.ndarray | None
     ) -> None:
         stack = tracker.stack
         extra = stack is not None and len(stack.goals) > 1
-        self.chunks = GoalChunks(stack, t, size) if extra else None
+        self.chunks = GoalChunks(stack, t, size) if extra and size is not None else None
         self.rows = GoalRows(stack, capacity) if extra else None
         robot, task = tracker.robot, tracker.task
         self.task = task

@@ -320,6 +320,9 @@ class Tracker:
         if trajectory is not None:
             raise InputError("trajectory", "None with tasks=[...] (each goal has its own)")
         for goal, name in zip(self.stack.goals, self.stack.names, strict=True):
+            if goal.trajectory is None:
+                expected = "a trajectory (None only in a clik.Controller, given it tick by tick)"
+                raise InputError(f"tasks[{name!r}].trajectory", expected, None)
             duration = real(getattr(goal.trajectory, "duration", None))
             if not in_range(duration, 0.0):
                 expected = "a trajectory whose duration is a finite time >= 0 [s]"

@@ -48,6 +48,7 @@ if TYPE_CHECKING:
     from clik.model.robot import Robot
     from clik.objectives.objective import Objective
     from clik.tasks.task import Task
+    from clik.trajectory.clock import Clock
 
 ProgressCallback = Callable[[int, int], None]
 
@@ -98,13 +99,14 @@ class _Run:
     def __init__(
         self,
         tracker: TrackerSettings,
-        t: np.ndarray,
-        chunks: ReferenceChunks,
+        t: np.ndarray | Clock,
+        chunks: ReferenceChunks | None,
         record_every: int,
         settings: StopSettings,
         progress: ProgressCallback | None,
         tolerance: Tolerance | None = None,
         q0: np.ndarray | None = None,
+        ring: int | None = None,
     ) -> None:
         self.tr = tracker
         self.tolerance = Tolerance() if tolerance is None else tolerance
@@ -123,7 +125,7 @@ class _Run:
         self.cset = cset = None if tracker.constraints is None else tracker.constraints.snapshot()
         self.rec = Recorder(
             self.N, record_every, robot.nq, nv, task.has_position,
-            task.has_orientation and task.has_position, cset is not None,
+            task.has_orientation and task.has_position, cset is not None, ring,
         )  # fmt: skip
         self.crun: ConstraintRun | None = None
         if cset is not None and python:  # the compiled engine's is in C++
@@ -131,7 +133,9 @@ class _Run:
                 cset, m, tracker.law, tracker.alpha, t, self.rec.capacity, task.frame_id,
                 task.rows, self.data,
             )  # fmt: skip
-        self.goals = GoalState(tracker, t, chunks.size, self.rec.capacity, q0)
+        self.goals = GoalState(
+            tracker, t, None if chunks is None else chunks.size, self.rec.capacity, q0
+        )
         self.q = np.zeros(robot.nq)  # this sample's configuration (the objectives read it)
         self.speed_step: SpeedStep | None = None  # the compiled engine's is in C++
         if tracker.speed is not None and python:
@@ -139,15 +143,13 @@ class _Run:
         self.monitor = ViolationMonitor(_joint_range(robot, cset))
         self.checks = StopChecks(settings, tracker.law, self.dt)
         self.e6 = np.zeros(6)
-        self.steps, self.max_err, self.err = 0, 0.0, 0.0
-        rows = task.rows
-        self.pos_rows = rows[rows < 3]
-        self.rot_rows = rows[rows >= 3]
+        self.steps, self.max_err, self.err, self.err_rot, self.r = 0, 0.0, 0.0, 0.0, 0
+        self.qdot, self.dq = np.zeros(nv), np.zeros(nv)  # qdot_k (the law's), qdot_k dt
+        self.pos_rows, self.rot_rows = task.rows[task.rows < 3], task.rows[task.rows >= 3]
 
     def law(self, r: int, out: np.ndarray) -> float:
         """The tracker's law on the first ``r`` rows of this run's extended task."""
-        step = self.speed_step
-        goals = self.goals
+        step, goals = self.speed_step, self.goals
         if goals.parts is not None:
             z = goals.objective_gradients(self.robot.model, self.data, self.ext, self.q)
             return self.tr.law_velocity(self.ext, r, out, None, goals.parts, z)
@@ -242,6 +244,8 @@ class _Run:
         if self.goals.rows is not None:
             self.goals.rows.keep(j)
         if self.crun is not None:
+            if self.rec.ring:  # a ring's slot held an older sample
+                self.crun.clear(j)
             assert self.rec.active is not None and self.rec.distance is not None
             self.rec.active[j] = r - self.m
             self.rec.distance[j] = self.crun.min_distance
@@ -265,6 +269,19 @@ class _Run:
         wall = time.perf_counter() - start
         if self.progress is not None:
             self.progress(self.N if status == "completed" else self.steps, self.N)
+        return self.finished(status, reason, wall, out_of_reach)
+
+    def finished(
+        self, status: str, reason: str, wall: float, out_of_reach: str = ""
+    ) -> TrackingResult:
+        """The result of the samples run so far, judged (violations, tolerance, speeds).
+
+        Args:
+            status: How the samples ended: ``"completed"`` or a check's status.
+            reason: Its reason.
+            wall: Wall time of the samples [s].
+            out_of_reach: Why the reference is out of reach, added to a failed run's reason.
+        """
         if status != "completed" and out_of_reach:
             reason += f"; {out_of_reach}"
         status, reason = self._final_status(status, reason)
@@ -276,51 +293,80 @@ class _Run:
         return result
 
     def samples(self, q: np.ndarray) -> tuple[str, str]:
-        """The loop, one sample at a time (the specification of the compiled engine).
+        """The loop: :meth:`sample` at every sample of the grid (the engine's specification).
 
         Sets :attr:`steps`, :attr:`max_err` and :attr:`err`; returns the status and reason.
         """
-        model, m, dt, N = self.robot.model, self.m, self.dt, self.N
-        goals = self.goals
-        crun, rec, t = self.crun, self.rec, self.t
-        qdot = np.zeros(self.robot.nv)
-        dq = np.zeros(self.robot.nv)
+        N, goals, t = self.N, self.goals, self.t
+        assert self.chunks is not None  # an offline run (a controller's has none)
         c0, c1, P_d, R_d, FF, at_rest = self.chunks.load(0)
         G_ref, G_ff, at_rest = goals.load(0, at_rest)
         progress_every = max(1, N // 100)
-        rec.start(q)
+        self.rec.start(q)
         for k in range(N):
             if k == c1:
                 c0, c1, P_d, R_d, FF, at_rest = self.chunks.load(k)
                 G_ref, G_ff, at_rest = goals.load(k, at_rest)
             kk = k - c0
-            p_d = None if P_d is None else P_d[kk]
-            J6 = self.kinematics(q)
-            self.task_rows(J6, p_d, None if R_d is None else R_d[kk], FF[kk])
-            if goals.rows is not None and G_ref is not None and G_ff is not None:
-                goals.rows.fill(model, self.data, q, G_ref[kk], G_ff[kk], self.ext)
-            self.q = q
-            exact = rec.due(k)
-            r = m if crun is None else m + crun.update(k, q, self.ext, self.law, exact)
-            blocked = self.law(r, qdot)
-            self.within_speed_limits(r, qdot)
-            self.err, err_rot = self.error_norms()
-            self.max_err = max(self.max_err, self.err)
-            worst = self.err if goals.rows is None else max(self.err, goals.rows.errors(self.ext))
-            stop = self.stop(k, qdot, worst, r, blocked, bool(at_rest[kk]))
-            self.observe_limits(float(t[k]), q)
-            if exact or stop is not None:
-                self.record(k, q, qdot, p_d, self.err, err_rot, r)
-            rec.every_sample(q, qdot)
-            self.steps = k + 1
+            stop = self.sample(
+                k, q, None if P_d is None else P_d[kk], None if R_d is None else R_d[kk],
+                FF[kk], bool(at_rest[kk]), None if G_ref is None else G_ref[kk],
+                None if G_ff is None else G_ff[kk],
+            )  # fmt: skip
             if stop is not None:
                 return stop
             if self.progress is not None and k % progress_every == 0:
                 self.progress(k, N)
             if k + 1 < N:
-                np.multiply(qdot, dt, out=dq)
-                q = pin.integrate(model, q, dq)
+                q = self.integrate(q)
         return "completed", f"reached the end of the trajectory at t = {t[-1]:.6g} s"
+
+    def sample(
+        self, k: int, q: np.ndarray, p_d: np.ndarray | None, R_d: np.ndarray | None,
+        ff: np.ndarray, at_rest: bool, g_ref: np.ndarray | None = None,
+        g_ff: np.ndarray | None = None,
+    ) -> tuple[str, str] | None:  # fmt: skip
+        """One sample (one tick of a controller): steps 1-5 and the record, at ``q``.
+
+        Args:
+            k: The sample's index (its time is ``t[k]``).
+            q: ``q_k``.
+            p_d: The primary task's reference position (3,) at ``t_k`` [m], or None.
+            R_d: Its reference rotation (3, 3), or None.
+            ff: Its rows' feed-forward (m0,).
+            at_rest: Whether every feed-forward of this sample is zero (the stall check).
+            g_ref: The other goals' references (D,), or None.
+            g_ff: Their feed-forward (M,), or None.
+
+        Returns:
+            The status and reason of a check that fired, else None. :attr:`qdot` holds
+            ``qdot_k``; :meth:`integrate` gives ``q_{k+1}``.
+        """
+        goals, crun, rec, qdot = self.goals, self.crun, self.rec, self.qdot
+        J6 = self.kinematics(q)
+        self.task_rows(J6, p_d, R_d, ff)
+        if goals.rows is not None and g_ref is not None and g_ff is not None:
+            goals.rows.fill(self.robot.model, self.data, q, g_ref, g_ff, self.ext)
+        self.q = q
+        exact = rec.due(k)
+        r = self.m if crun is None else self.m + crun.update(k, q, self.ext, self.law, exact)
+        blocked = self.law(r, qdot)
+        self.within_speed_limits(r, qdot)
+        self.err, self.err_rot = self.error_norms()
+        self.max_err = max(self.max_err, self.err)
+        worst = self.err if goals.rows is None else max(self.err, goals.rows.errors(self.ext))
+        stop = self.stop(k, qdot, worst, r, blocked, at_rest)
+        self.observe_limits(float(self.t[k]), q)
+        if exact or stop is not None:
+            self.record(k, q, qdot, p_d, self.err, self.err_rot, r)
+        rec.every_sample(q, qdot)
+        self.steps = k + 1
+        self.r = r
+        return stop
+
+    def integrate(self, q: np.ndarray) -> np.ndarray:
+        """``q_{k+1} = q_k (+) qdot_k dt`` (``pin.integrate``)."""
+        return pin.integrate(self.robot.model, q, np.multiply(self.qdot, self.dt, out=self.dq))
 
     def _final_status(self, status: str, reason: str) -> tuple[str, str]:
         """``completed`` becomes ``violated`` when a limit was crossed; skipped rows named."""
@@ -362,14 +408,12 @@ class _Run:
             "gain": [float(g) for g in tr.K_task],
             "dt": self.dt,
             "record_every": self.rec.every,
-            "duration": float(
-                self.chunks.trajectory.duration if tr.stack is None else tr.stack.duration()
-            ),
+            "duration": self._duration(),
             "stability_margin_max": float(self.checks.worst_margin),
             "joint_speed": None if tr.speed is None else tr.speed.as_info(),
         }
         result = TrackingResult(
-            t=self.t[self.rec.idx[: self.rec.j]],
+            t=self.t[self.rec.idx[self.rec.order()]],
             status=status,
             reason=reason,
             wall_time_s=wall,
@@ -382,9 +426,17 @@ class _Run:
             **arrays,  # type: ignore[arg-type]
         )
         if self.crun is not None:
-            self.crun.finish(result, self.rec.j)
+            rec = self.rec
+            self.crun.finish(result, rec.j, (rec.j, rec.capacity) if rec.ring else None)
         self._task_errors(result, max_err, err)
         return result
+
+    def _duration(self) -> float:
+        """The reference's duration [s]; an open run's: the time of its samples so far."""
+        if self.chunks is None:
+            return float(max(self.steps - 1, 0) * self.dt)
+        stack = self.tr.stack
+        return float(self.chunks.trajectory.duration if stack is None else stack.duration())
 
     def _task_errors(self, result: TrackingResult, max_err: float, err: float) -> None:
         """Each task's errors by name (``result.task_errors``) and the others' record."""
@@ -396,7 +448,7 @@ class _Run:
         rows = self.goals.rows
         result.task_errors = task_errors(self.tr.stack, primary, rows)
         if rows is not None:
-            result.extra["task_errors"] = rows.record[: self.rec.j].copy()
+            result.extra["task_errors"] = rows.record[self.rec.order()].copy()
             result.info["tasks"] = list(result.task_errors)
 
     # -- reasons -----------------------------------------------------------------------

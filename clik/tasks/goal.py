@@ -22,7 +22,9 @@ class Goal:
             :class:`~clik.tasks.posture_task.PostureTask`,
             :class:`~clik.tasks.com_task.ComTask`).
         trajectory: Its reference: a pose, position or orientation trajectory
-            (``clik.trajectory``), or a :class:`~clik.trajectory.JointPath` for a posture.
+            (``clik.trajectory``), or a :class:`~clik.trajectory.JointPath` for a posture;
+            None for a :class:`~clik.control.Controller`, given its references tick by
+            tick (``clik.track`` refuses it).
         name: Its name in reports (``task_errors``) and reasons; default ``"task<i>"``.
         priority: Its level, an integer >= 1 (1 is the highest): under law (10) a level
             moves in the null space of the constraints and of every level above it.
@@ -33,7 +35,7 @@ class Goal:
     """
 
     task: BaseTask
-    trajectory: Any
+    trajectory: Any = None
     name: str | None = None
     priority: int = 1
     gain: float | Sequence[float] | np.ndarray | None = None
@@ -44,7 +46,7 @@ class Goal:
                 "tasks.task", "a clik task (Task, RelativeTask, PostureTask, ComTask)",
                 type(self.task).__name__,
             )  # fmt: skip
-        if not callable(getattr(self.trajectory, "sample", None)):
+        if self.trajectory is not None and not callable(getattr(self.trajectory, "sample", None)):
             raise InputError(
                 "tasks.trajectory", "a trajectory (a duration and sample(t))",
                 type(self.trajectory).__name__,

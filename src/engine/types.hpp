@@ -15,9 +15,26 @@ using Mat3 = Eigen::Matrix3d;
 
 constexpr double INF = std::numeric_limits<double>::infinity();
 
-// A run's sample times t_k [s], read in place from the caller's array (a 10^8-sample run's
-// grid is 800 MB: never copied). The array must outlive the run that reads it.
-using TimesView = Eigen::Map<const Vec>;
+// A run's sample times t_k [s]. An offline run reads them in place from the caller's array
+// (a 10^8-sample run's grid is 800 MB: never copied; the array must outlive the run). An
+// open run (a controller's ticks, no last sample) has no array: t_k = t0 + k dt, in this
+// order of operations, as Python computes it (bit for bit), and n = LONG_MAX.
+struct Clock {
+  const double* t = nullptr;  // the grid (n), or null: an open run
+  long n = 0;                 // samples (LONG_MAX: an open run)
+  double t0 = 0.0, dt = 0.0;  // an open run's first time and step [s]
+
+  static Clock grid(const double* t, long n) { return {t, n, 0.0, 0.0}; }
+  static Clock open(double t0, double dt) {
+    return {nullptr, std::numeric_limits<long>::max(), t0, dt};
+  }
+
+  bool is_open() const { return t == nullptr; }
+  double operator[](long k) const {
+    return t != nullptr ? t[k] : t0 + static_cast<double>(k) * dt;
+  }
+  long size() const { return n; }
+};
 
 // A task has at most six rows (x, y, z, rx, ry, rz): its square matrices live on the
 // stack (fixed capacity, run-time size), faster than heap matrices at this size.

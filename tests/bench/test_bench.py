@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from clik.bench.config import QUICK
-from clik.bench.suite import REQUIRED_KEYS, run_bench
+from clik.bench.suite import REQUIRED_KEYS
 from clik.bench.targets import default_targets_path, evaluate_targets, load_targets
 from clik.errors import InputError
 
@@ -21,8 +21,22 @@ CLIK = Path(__file__).resolve().parents[2] / "clik"
 HAS_PINK = importlib.util.find_spec("pink") is not None and (
     importlib.util.find_spec("daqp") is not None or importlib.util.find_spec("quadprog") is not None
 )
+HAS_MINK = all(importlib.util.find_spec(name) is not None for name in ("mink", "mujoco")) and (
+    importlib.util.find_spec("daqp") is not None or importlib.util.find_spec("quadprog") is not None
+)
+MINK_KEYS = {
+    "tick_us.mink_panda_pose",
+    "tick_us.mink_panda_pose_obstacles",
+    "tick_quality.mink_panda_pose",
+    "tick_quality.mink_panda_pose_obstacles",
+}
 PINK_KEYS = {
     "step_us.pink_panda_pose",
+    "step_us.pink_panda_pose_obstacles",
+    "tick_us.pink_panda_pose",
+    "tick_us.pink_panda_pose_obstacles",
+    "tick_quality.pink_panda_pose",
+    "tick_quality.pink_panda_pose_obstacles",
     "step_us.pink_dual_arm",
     "solve.pink_median_us",
     "ratios.pink_over_panda_pose",
@@ -59,13 +73,6 @@ def text_of(quick: tuple[Path, dict[str, Any]]) -> str:
     return (quick[0] / "bench.md").read_text()
 
 
-@pytest.fixture(scope="module")
-def quick(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Any]]:
-    out = tmp_path_factory.mktemp("bench")
-    returned = run_bench(out, quick=True)
-    return out, returned
-
-
 def test_quick_run_writes_json_and_markdown(quick):
     out, returned = quick
     report = json.loads((out / "bench.json").read_text())
@@ -90,8 +97,10 @@ def test_every_required_key_is_present_and_sane(quick):
     report = json.loads((out / "bench.json").read_text())
     for key in REQUIRED_KEYS:
         value = lookup(report, key)
-        if key in PINK_KEYS and not HAS_PINK:
+        if (key in PINK_KEYS and not HAS_PINK) or (key in MINK_KEYS and not HAS_MINK):
             assert value is None, key
+        elif key.startswith("tick_quality."):  # a clearance may be negative (inside a sphere)
+            assert all(math.isfinite(figure) for figure in value.values()), (key, value)
         elif key.startswith("memory_growth_mb"):
             # Growth of the peak RSS: may be 0 for the quick run's few samples.
             assert isinstance(value, int | float) and math.isfinite(value) and value >= 0, key
@@ -197,7 +206,10 @@ def test_case_study_memory_and_meta_sections(quick):
 def test_pink_lines_and_ratios(quick):
     _, report = quick
     assert positive(report["ratios"]["pink_over_panda_pose"])
-    assert positive(report["ratios"]["pink_over_panda_pose_obstacles"])
+    assert report["ratios"]["pink_over_panda_pose_obstacles"] == pytest.approx(
+        report["step_us"]["pink_panda_pose_obstacles"] / report["step_us"]["panda_pose_obstacles"]
+    )
+    assert "SelfCollisionBarrier" in report["steps"]["pink_panda_pose_obstacles"]["description"]
     assert report["ratios"]["pink_over_solve"] == pytest.approx(
         report["solve"]["pink_median_us"] / report["solve"]["median_us"]
     )
@@ -212,14 +224,28 @@ def test_targets_come_from_the_shipped_toml(quick):
     shipped = load_targets()
     assert [t["name"] for t in report["targets"]] == [t.name for t in shipped]
     assert [t["target"] for t in report["targets"]] == [t.wanted for t in shipped]
-    assert len(shipped) == 13
+    assert len(shipped) == 20
     by_measure = {(t.measure, t.over): t for t in shipped}
     assert by_measure[("step_us.dual_arm", None)].bound == 6.0
     assert by_measure[("step_us.pink_dual_arm", "step_us.dual_arm")].bound == 30.0
     assert by_measure[("step_us.planar4r", None)].bound == 1.5
     assert by_measure[("step_us.zoo_obstacle_median", None)].bound == 20.0
     assert by_measure[("step_us.panda_pose", None)].bound == 2.5
-    assert by_measure[("step_us.pink_panda_pose", "step_us.panda_pose_obstacles")].bound == 20.0
+    # pink with its barrier over clik with its obstacle rows (like against like)
+    obstacles = by_measure[("step_us.pink_panda_pose_obstacles", "step_us.panda_pose_obstacles")]
+    assert obstacles.name == "pink / panda_pose_obstacles" and obstacles.bound == 20.0
+    assert ("step_us.pink_panda_pose", "step_us.panda_pose_obstacles") not in by_measure
+    ticks = {
+        ("tick_us.panda_pose", None): ("<=", 3.0),
+        ("tick_us.pink_panda_pose", "tick_us.panda_pose"): (">=", 40.0),
+        ("tick_us.mink_panda_pose", "tick_us.panda_pose"): (">=", 30.0),
+        ("tick_us.panda_pose_obstacles", None): ("<=", 8.0),
+        ("tick_us.pink_panda_pose_obstacles", "tick_us.panda_pose_obstacles"): (">=", 100.0),
+        ("tick_us.mink_panda_pose_obstacles", "tick_us.panda_pose_obstacles"): (">=", 15.0),
+        ("tick_error_m.panda_pose", None): ("<=", 1e-6),
+    }
+    for key, (op, bound) in ticks.items():
+        assert (by_measure[key].op, by_measure[key].bound) == (op, bound), key
     for t in report["targets"]:
         if t["met"] is not None:
             assert math.isfinite(t["value"]), t

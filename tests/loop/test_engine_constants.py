@@ -30,6 +30,7 @@ SHARED = {
     "JOINT_TOLERANCE": ("clik.constraints.violations", "JOINT_TOLERANCE"),
     "STALL_PROGRESS": ("clik.solving.solve_problem", "STALL_PROGRESS"),
     "STALL_ITERATIONS": ("clik.solving.solve_problem", "STALL_ITERATIONS"),
+    "ROTATION_TOLERANCE": ("clik.trajectory._validate", "ROTATION_TOLERANCE"),
 }
 """Engine attribute -> (Python module, name) of the same number."""
 

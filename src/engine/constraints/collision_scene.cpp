@@ -124,6 +124,18 @@ void CollisionScene::move_with(const ObstacleConfig& obstacle) {
   moving_.push_back(obstacle);
 }
 
+void CollisionScene::set_obstacle(const ObstacleConfig& obstacle) {
+  const auto g = static_cast<std::size_t>(obstacle.geometry);
+  const int at = moving_of_.at(g);
+  if (at >= 0) {
+    moving_[static_cast<std::size_t>(at)] = obstacle;
+  } else {
+    moving_of_[g] = static_cast<int>(moving_.size());
+    moving_.push_back(obstacle);
+  }
+  placed_at_[g] = 0;  // placed again at the next sample
+}
+
 void CollisionScene::begin_sample(const pinocchio::Data& data, double t) {
   data_ = &data;
   t_ = t;

@@ -91,6 +91,10 @@ class CollisionScene {
   // geometries (a moving obstacle's kind registers it once).
   void move_with(const ObstacleConfig& obstacle);
 
+  // Place this obstacle by its new pose and velocity from now on (a controller's move;
+  // a static obstacle becomes one the scene places itself).
+  void set_obstacle(const ObstacleConfig& obstacle);
+
   // A new sample: geometries are placed at data.oMi (a moving obstacle at time t [s])
   // when a distance first asks for them (`data` must outlive the sample's queries).
   void begin_sample(const pinocchio::Data& data, double t);

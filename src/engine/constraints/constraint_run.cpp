@@ -42,7 +42,7 @@ const char* action_name(EventAction action) {
 }
 
 ConstraintRun::ConstraintRun(const ConstraintSetConfig& config, const pinocchio::Model& model,
-                             int m, LawKind law, double alpha, const TimesView& t, int n_rec,
+                             int m, LawKind law, double alpha, const Clock& t, int n_rec,
                              int frame, std::vector<int> task_rows, int task_m)
     : cfg_(config), model_(model), m_(m), task_m_(task_m < 0 ? m : task_m), law_(law), alpha_(alpha), t_(t) {
   if (cfg_.model == nullptr || model.nv != cfg_.model->nv || model.nq != cfg_.model->nq) {
@@ -94,7 +94,7 @@ ConstraintRun::ConstraintRun(const ConstraintSetConfig& config, const pinocchio:
 
 // -- per sample ------------------------------------------------------------------------
 
-int ConstraintRun::update(int k, const Eigen::Ref<const Vec>& q, pinocchio::Data& data,
+int ConstraintRun::update(long k, const Eigen::Ref<const Vec>& q, pinocchio::Data& data,
                           ExtendedTask& ext, Law& law, bool exact) {
   const double tk = t_[k];
   // _evaluate: constraints whose error is positive, or that are active, at this sample.
@@ -260,7 +260,11 @@ void ConstraintRun::observe_limits(double tk, ViolationMonitor& monitor) const {
   }
 }
 
-void ConstraintRun::record(int j) {
+void ConstraintRun::record(int j, bool ring) {
+  if (ring) {  // a ring's slot: only the active rows are written below
+    rec_active_.row(j).setConstant(-1);
+    rec_witness_.row(j).setConstant(std::numeric_limits<double>::quiet_NaN());
+  }
   for (KindRun& kind : kinds_) std::visit([&](auto& k) { k.record(j); }, kind);
   for (int s = 0; s < static_cast<int>(active_.size()); ++s) {
     const Candidate& c = active_[s];
@@ -296,6 +300,18 @@ std::vector<std::string> ConstraintRun::skipped_names() const {
     if (e.action == EventAction::skipped) names.insert(names_[e.key]);
   }
   return {names.begin(), names.end()};
+}
+
+bool ConstraintRun::move_obstacle(const std::string& name, const Vec3& position,
+                                  const Vec3& velocity, const Mat3& rotation, double tk) {
+  bool moved = false;
+  for (KindRun& kind : kinds_) {
+    const auto move = [&](auto& k) {
+      return k.move_obstacle(name, position, velocity, rotation, tk);
+    };
+    moved = std::visit(move, kind) || moved;
+  }
+  return moved;
 }
 
 }  // namespace clik

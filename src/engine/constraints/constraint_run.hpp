@@ -15,9 +15,10 @@
 //
 //   cfg is copied (the run keeps it; its owners keep the Python model and GeometryModel
 //   alive); `model` (the robot's pinocchio::Model, the config's) must outlive the run; t is
-//   the run's time grid (read in place: it must outlive the run); n_rec the recorded
-//   samples (Recorder.capacity); alpha the task's largest gain [1/s]; frame and task_rows
-//   the task's frame and rows among (x, y, z, rx, ry, rz) (the dexterity row needs them).
+//   the run's times (an offline grid is read in place: it must outlive the run); n_rec the
+//   recorded samples (Recorder.capacity: a ring's slots); alpha the task's largest gain
+//   [1/s]; frame and task_rows the task's frame and rows among (x, y, z, rx, ry, rz) (the
+//   dexterity row needs them).
 //
 // Per sample k, after the loop computed pinocchio::computeJointJacobians(model, data, q)
 // and wrote the task rows 0..m of `ext` (J, e, ff; K set at construction):
@@ -25,7 +26,7 @@
 //   int v = crun.update(k, q, data, ext, law, exact);  // exact = this sample is recorded
 //   int r = m + v;                                     // the law runs on rows 0..r
 //   crun.observe_limits(t[k], monitor);                // limits crossed, to the monitor
-//   crun.record(j);                                    // when recorded in slot j
+//   crun.record(j, ring);                              // when recorded in slot j
 //
 //   update writes rows m..m+v of ext (J, e, K, ff) and, under the projection rule, may run
 //   `law` on ext (law.velocity(ext, r', qdot) with r' < m + v). It allocates nothing in
@@ -76,7 +77,7 @@ class ConstraintRun {
   // task_m: the primary task's rows (0 .. task_m), those of `frame` and `task_rows`
   // (-1: m, a run with one task).
   ConstraintRun(const ConstraintSetConfig& config, const pinocchio::Model& model, int m,
-                LawKind law, double alpha, const TimesView& t, int n_rec, int frame = -1,
+                LawKind law, double alpha, const Clock& t, int n_rec, int frame = -1,
                 std::vector<int> task_rows = {}, int task_m = -1);
   // The kinds point into the run's own copy of the config and scene: neither copied nor moved.
   ConstraintRun(const ConstraintRun&) = delete;
@@ -85,14 +86,20 @@ class ConstraintRun {
   // Evaluate, activate, fill the active rows into ext (rows m .. m + v) and release;
   // returns v. data: kinematics and joint Jacobians at q (computeJointJacobians).
   // exact: make every obstacle's nearest distance exact (a recorded sample).
-  int update(int k, const Eigen::Ref<const Vec>& q, pinocchio::Data& data, ExtendedTask& ext,
+  int update(long k, const Eigen::Ref<const Vec>& q, pinocchio::Data& data, ExtendedTask& ext,
              Law& law, bool exact);
 
   // Every limit the kinds guard that is crossed at this sample, to the monitor.
   void observe_limits(double tk, ViolationMonitor& monitor) const;
 
+  // An obstacle moved by a controller: at `position` at time tk [s], then `velocity`
+  // (every kind is asked; the one that has it moves it). False: no obstacle so named.
+  bool move_obstacle(const std::string& name, const Vec3& position, const Vec3& velocity,
+                     const Mat3& rotation, double tk);
+
   // Keep this sample's active set, witness points and the kinds' records in slot j.
-  void record(int j);
+  // ring: slot j was written before (a ring record): its unset entries are reset first.
+  void record(int j, bool ring = false);
 
   // This sample's exact nearest obstacle distance [m] (inf: none exact).
   double min_distance() const { return min_distance_; }
@@ -132,7 +139,7 @@ class ConstraintRun {
   LawKind law_;
   double alpha_;
   int limit_;
-  TimesView t_;
+  Clock t_;
   std::optional<CollisionScene> scene_;  // shared by the kinds that measure distances
   std::vector<KindRun> kinds_;           // in the set's order
   std::vector<std::string> names_;       // by key; each kind's keys follow the previous'

@@ -27,7 +27,8 @@
 //     const std::optional<double>& gain() const;
 //     // optional (KindDefaults has them doing nothing):
 //     void observe_limits(double tk, ViolationMonitor&, const std::vector<std::string>&) const;
-//     void record(int j);                            // recorded sample j
+//     void record(int j);                            // recorded sample j: all of its row
+//                                                    // (a ring's slot j is written again)
 //     double min_distance() const;                   // exact nearest obstacle distance [m]
 //     void records(std::vector<RecordArray>& out) const;  // after the run, to Python
 //   };
@@ -78,7 +79,7 @@ struct KindSetup {
   int slot;                       // the kind's index among the run's kinds
   int m;                          // task rows of every goal: the constraint rows' offset
   int task_m;                     // the primary task's rows 0..task_m (its frame, task_rows)
-  const TimesView& t;             // the run's time grid [s]
+  const Clock& t;                 // the run's times [s]
   int n_rec;                      // recorded samples
   int frame;                      // the task's frame (-1: none given)
   const std::vector<int>& task_rows;  // the task's rows among (x, y, z, rx, ry, rz)
@@ -146,6 +147,11 @@ struct RecordArray {
 // The optional parts of a kind, doing nothing: a kind derives from it and hides
 // (same name, same signature) what it has.
 struct KindDefaults {
+  // An obstacle moved by a controller (named; pose at time tk [s], velocity): whether
+  // this kind has it (the obstacle kind does).
+  bool move_obstacle(const std::string&, const Vec3&, const Vec3&, const Mat3&, double) {
+    return false;
+  }
   void observe_limits(double, ViolationMonitor&, const std::vector<std::string>&) const {}
   void record(int) {}
   double min_distance() const { return INF; }

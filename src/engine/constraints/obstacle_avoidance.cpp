@@ -51,6 +51,7 @@ ObstacleRows::ObstacleRows(const ObstacleRowsConfig& config, const KindSetup& se
   const int nv = setup.model.nv;
   if (setup.scene != nullptr && n_obs_ > 0) {
     scene_ = &setup.scene->config();
+    collision_ = setup.scene;
     for (int o = 0; o < n_obs_; ++o) {
       ObstacleConfig& ob = cfg_.obstacles[o];
       if (ob.geometry < 0) {  // the scene's: (link geometry, obstacle geometry) pairs
@@ -69,6 +70,7 @@ ObstacleRows::ObstacleRows(const ObstacleRowsConfig& config, const KindSetup& se
   margin_o_ = Vec::Zero(n_obs_);
   obs_step_ = Vec::Zero(n_obs_);
   const double dt = setup.dt();
+  dt_ = dt;
   for (int o = 0; o < n_obs_; ++o) {
     const ObstacleConfig& ob = cfg_.obstacles[o];
     thr_o_[o] = ob.threshold;
@@ -90,6 +92,26 @@ ObstacleRows::ObstacleRows(const ObstacleRowsConfig& config, const KindSetup& se
   run_min_ = Vec::Constant(n_obs_, INF);
   run_min_t_ = Vec::Zero(n_obs_);
   run_min_link_.assign(n_obs_, -1);
+  moved_.assign(n_obs_, 0);
+}
+
+bool ObstacleRows::move_obstacle(const std::string& name, const Vec3& position,
+                                 const Vec3& velocity, const Mat3& rotation, double tk) {
+  for (int o = 0; o < n_obs_; ++o) {
+    ObstacleConfig& ob = cfg_.obstacles[o];
+    if (ob.name != name) continue;
+    ob.position = position - tk * velocity;  // the pose at t = 0 of the same motion
+    ob.velocity = velocity;
+    ob.rotation = rotation;
+    const Vec3& v = velocity;
+    obs_step_[o] = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt_;
+    has_obs_step_ = (obs_step_.array() > 0.0).any();
+    lb_.col(o).setConstant(-INF);  // its distances are unknown: evaluated again
+    moved_[static_cast<std::size_t>(o)] = 1;
+    if (collision_ != nullptr) collision_->set_obstacle(ob);
+    return true;
+  }
+  return false;
 }
 
 // obstacle:<obstacle>:<link label>, pair (i, o) at i * n_obs + o.
@@ -128,9 +150,13 @@ void ObstacleRows::evaluate(Sample& s, std::vector<Candidate>& out) {
     const double distance = pd_[c.item].distance;
     lb_(i, o) = distance;
     done = 1;
-    if (cfg_.rows && (distance < c.threshold || s.is_active[c.key])) out.push_back(c);
+    // an active pair stays a candidate, unless its obstacle was just moved and it is
+    // beyond its threshold: then it is released (a jump must not pull the link after it)
+    const bool held = s.is_active[c.key] && !moved_[static_cast<std::size_t>(o)];
+    if (cfg_.rows && (distance < c.threshold || held)) out.push_back(c);
   }
   nearest_per_obstacle(s);
+  std::fill(moved_.begin(), moved_.end(), 0);  // a move counts for one sample
 }
 
 // Then each obstacle's nearest link (the first smallest bound, as np.argmin), until it is

@@ -49,6 +49,10 @@ class ObstacleRows : public KindDefaults {
   void evaluate(Sample& s, std::vector<Candidate>& out);
   void row(Sample& s, Candidate& c, Eigen::Ref<Eigen::RowVectorXd> row);
   const std::optional<double>& gain() const { return cfg_.gain; }
+  // ObstacleRun.move_obstacle: obstacle `name` at `position` at time tk [s], moving with
+  // `velocity` from then on; its certificates are dropped (evaluated again).
+  bool move_obstacle(const std::string& name, const Vec3& position, const Vec3& velocity,
+                     const Mat3& rotation, double tk);
   void observe_limits(double tk, ViolationMonitor& monitor,
                       const std::vector<std::string>& names) const;
   void record(int j);
@@ -62,6 +66,8 @@ class ObstacleRows : public KindDefaults {
   ObstacleRowsConfig cfg_;
   const pinocchio::Model& model_;
   const SceneConfig* scene_ = nullptr;
+  CollisionScene* collision_ = nullptr;  // the run's scene (a moved obstacle's placement)
+  double dt_ = 0.0;                      // the run's sample time [s]
   int slot_, base_ = 0, n_obs_, n_links_;
   double min_distance_ = INF;  // this sample's exact nearest distance (inf: none exact)
 
@@ -72,6 +78,7 @@ class ObstacleRows : public KindDefaults {
   std::vector<char> evaluated_;  // (n_links * n_obs), row-major
   Vec rho_dq_, obs_step_, thr_o_, margin_o_;
   bool has_obs_step_ = false;
+  std::vector<char> moved_;  // per obstacle: moved since the last sample (a controller's)
   std::vector<std::pair<int, int>> todo_;
   std::vector<PairDistance> pd_;  // per pair: its last evaluation
   pinocchio::Data::Matrix6x J6_;

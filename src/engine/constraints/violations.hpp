@@ -62,8 +62,13 @@ class ViolationMonitor {
   // In the order the limits were first crossed (as recorded).
   const std::vector<ViolationRecord>& records() const { return records_; }
 
+  // Every limit crossing noted so far (one per limit per sample): a caller compares it
+  // before and after a sample to tell whether that sample crossed any.
+  long notes() const { return notes_; }
+
  private:
   void note(const std::string& key, const char* kind, double t, double excess) {
+    ++notes_;
     auto it = where_.find(key);
     if (it == where_.end()) {
       where_.emplace(key, records_.size());
@@ -78,6 +83,7 @@ class ViolationMonitor {
   JointMonitorConfig j_;
   std::vector<ViolationRecord> records_;
   std::unordered_map<std::string, std::size_t> where_;
+  long notes_ = 0;
 };
 
 }  // namespace clik

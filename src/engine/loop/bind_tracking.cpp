@@ -1,6 +1,8 @@
 // Python entry point of a tracking run (used by clik/loop/compiled_run.py): Python
 // builds the robot, the reference chunks and the record arrays, and hands them over
 // as typed configs; the engine runs the samples and writes the record in place.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -21,6 +23,8 @@
 #include "boundary.hpp"
 #include "constraints/bind_constraints.hpp"
 #include "constraints/constraint_run.hpp"
+#include "loop/bind_record.hpp"
+#include "loop/py_tracking_run.hpp"
 #include "loop/recording.hpp"
 #include "loop/tracking.hpp"
 #include "model/model_bridge.hpp"
@@ -32,108 +36,28 @@ namespace clik {
 namespace {
 
 template <typename T>
-using Array = nb::ndarray<T, nb::numpy, nb::c_contig, nb::device::cpu>;
-template <typename T>
-using In = nb::ndarray<const T, nb::c_contig, nb::device::cpu>;
+using Array = WrittenArray<T>;
 
-// The Recorder's arrays (clik/loop/recording.py), written in place: each must already have
-// its dtype and be contiguous (never converted: a converted copy would be written).
-struct RecordArrays {
-  long N = 0, every = 1;
-  Array<std::intptr_t> idx;
-  Array<double> q, qdot, qddot, position;
-  std::optional<Array<double>> reference;
-  Array<double> error;
-  std::optional<Array<double>> orientation_error;
-  std::optional<Array<std::int16_t>> active;
-  std::optional<Array<double>> distance;
-  Array<double> joint_min, joint_max, qdot_prev;
-  std::optional<Array<double>> goal_error;  // (n, G, 2): each goal's error norms
-
-  long capacity() const { return static_cast<long>(idx.shape(0)); }
-  long nq() const { return static_cast<long>(q.shape(1)); }
-  long nv() const { return static_cast<long>(qdot.shape(1)); }
-
-  // Throws std::invalid_argument unless every shape fits N, every, nq and nv.
-  void validate() const {
-    const long n = idx.ndim() == 1 ? capacity() : -1, every_ = std::max(every, 1L);
-    const long kept = N < 1 ? 0 : (N - 1) / every_ + 1 + ((N - 1) % every_ ? 1 : 0);
-    auto shaped = [](const auto& a, long rows, long cols) {
-      return (cols < 0 ? a.ndim() == 1 : a.ndim() == 2 && static_cast<long>(a.shape(1)) == cols) &&
-             static_cast<long>(a.shape(0)) == rows;
-    };
-    const bool ok =
-        N >= 1 && every >= 1 && n >= kept && q.ndim() == 2 &&
-        qdot.ndim() == 2 && shaped(q, n, nq()) && shaped(qdot, n, nv()) &&
-        shaped(qddot, n, nv()) && shaped(position, n, 3) && shaped(error, n, -1) &&
-        (!reference || shaped(*reference, n, 3)) &&
-        (!orientation_error || shaped(*orientation_error, n, -1)) &&
-        (!active || shaped(*active, n, -1)) && (!distance || shaped(*distance, n, -1)) &&
-        shaped(joint_min, nq(), -1) && shaped(joint_max, nq(), -1) && shaped(qdot_prev, nv(), -1) &&
-        (!goal_error || (goal_error->ndim() == 3 && static_cast<long>(goal_error->shape(0)) == n &&
-                         goal_error->shape(2) == 2));
-    if (!ok) {
-      throw std::invalid_argument(
-          "RecordArrays: idx (n,), q (n, nq), qdot and qddot (n, nv), position and reference "
-          "(n, 3), error, orientation_error, active and distance (n,), joint_min and joint_max "
-          "(nq,), qdot_prev (nv,), goal_error (n, G, 2), with n >= the samples kept of N every "
-          "`every`");
-    }
-  }
-
-  RecordBuffers buffers() const {
-    RecordBuffers b;
-    b.N = N;
-    b.every = every;
-    b.capacity = capacity();
-    b.nq = static_cast<int>(nq());
-    b.nv = static_cast<int>(nv());
-    b.idx = idx.data();
-    b.q = q.data();
-    b.qdot = qdot.data();
-    b.qddot = qddot.data();
-    b.position = position.data();
-    b.reference = reference ? reference->data() : nullptr;
-    b.error = error.data();
-    b.orientation_error = orientation_error ? orientation_error->data() : nullptr;
-    b.active = active ? active->data() : nullptr;
-    b.distance = distance ? distance->data() : nullptr;
-    b.joint_min = joint_min.data();
-    b.joint_max = joint_max.data();
-    b.qdot_prev = qdot_prev.data();
-    b.goal_error = goal_error ? goal_error->data() : nullptr;
-    b.goals = goal_error ? static_cast<int>(goal_error->shape(1)) : 0;
-    return b;
-  }
-};
-
-const char* stop_name(Stop s) {
-  switch (s) {
-    case Stop::none: return "";
-    case Stop::non_finite: return "non_finite";
-    case Stop::joint_step: return "joint_step";
-    case Stop::unstable: return "unstable";
-    case Stop::deadlock: return "deadlock";
-    case Stop::stall: return "stall";
-  }
-  return "";
+// The run's times: the grid t (N,) of an offline run, read in place; without t an open
+// run's t0 + k dt (dt: the law's), whose record is a ring (and a ring's run is open).
+Clock run_clock(const std::optional<In<double>>& t, double t0, const LawConfig& law,
+                const RecordArrays& record, const pinocchio::Model& m) {
+  require(!t == record.ring,
+          "TrackingRun: t None (an open run) needs RecordArrays(ring=True), and a "
+          "RecordArrays(ring=True) needs t None");
+  require(std::isfinite(t0), "TrackingRun: t0, a finite time [s]");
+  const bool shaped = !t || (t->ndim() == 1 && static_cast<long>(t->shape(0)) == record.N);
+  require(shaped && record.nq() == m.nq && record.nv() == m.nv,
+          "TrackingRun: t (N,) and the record's nq, nv are the model's");
+  if (!t) return Clock::open(t0, law.settings.dt);
+  const Eigen::Map<const Vec> grid(t->data(), static_cast<Eigen::Index>(t->shape(0)));
+  require(grid.allFinite(), "TrackingRun: t, finite times [s]");
+  return Clock::grid(t->data(), static_cast<long>(t->shape(0)));
 }
 
-// A run and the Python objects whose memory it uses (kept alive with it).
-struct PyTrackingRun {
-  nb::object model;
-  ModelShape built;   // the model's sizes when the run was built
-  long next = 0;      // the sample the next advance() starts at
-  bool stopped = false;
-  In<double> times;
-  RecordArrays record;
-  std::unique_ptr<ConstraintRun> constraints;  // before run: it outlives the loop's use
-  std::unique_ptr<TrackingRun> run;
-};
-
 void make_run(PyTrackingRun* self, nb::object model, const TaskConfig& task,
-              const LawConfig& law, const StopConfig& stop, In<double> t,
-              const RecordArrays& record, JointMonitorConfig joints,
+              const LawConfig& law, const StopConfig& stop, std::optional<In<double>> t,
+              double t0, const RecordArrays& record, JointMonitorConfig joints,
               const std::optional<ConstraintSetConfig>& constraints,
               const std::vector<GoalConfig>& goals) {
   const pinocchio::Model& m = borrow_model(model.ptr());
@@ -144,18 +68,12 @@ void make_run(PyTrackingRun* self, nb::object model, const TaskConfig& task,
   require(!record.goal_error || static_cast<int>(record.goal_error->shape(1)) == goal_rows.count(),
           "RecordArrays: goal_error (n, G, 2), G the run's goals (" +
               std::to_string(goal_rows.count()) + ")");
-  if (t.ndim() != 1 || static_cast<long>(t.shape(0)) != record.N || record.nq() != m.nq ||
-      record.nv() != m.nv) {
-    throw std::invalid_argument("TrackingRun: t (N,) and the record's nq, nv are the model's");
-  }
-  const TimesView grid(t.data(), static_cast<Eigen::Index>(t.shape(0)));
-  require(grid.allFinite(), "TrackingRun: t, finite times [s]");
+  const Clock times = run_clock(t, t0, law, record, m);
   require_window(stop.deadlock_window, law.settings.dt, "deadlock_window");
   require_window(stop.stall_window, law.settings.dt, "stall_window");
   for (Eigen::Index i = 0; i < law.K_task.size(); ++i) {
     require(finite_positive(law.K_task[i]), "LawConfig: K_task, finite gains > 0 [1/s]");
   }
-  const TimesView times(t.data(), static_cast<Eigen::Index>(t.shape(0)));
   std::unique_ptr<ConstraintRun> crun;
   if (constraints) {
     const int m_rows = m_all;
@@ -173,7 +91,7 @@ void make_run(PyTrackingRun* self, nb::object model, const TaskConfig& task,
   require(law.rows <= m_all + std::max(m.nv, 0), "LawConfig.rows: at most the task's rows + nv");
   auto run = std::make_unique<TrackingRun>(m, task, law, stop, times, record.buffers(),
                                            std::move(joints), crun.get(), goals);
-  new (self) PyTrackingRun{std::move(model), ModelShape::of(m), 0,    false, t,
+  new (self) PyTrackingRun{std::move(model), ModelShape::of(m), 0,    false, std::move(t),
                            record,           std::move(crun),   std::move(run)};
 }
 
@@ -183,9 +101,11 @@ nb::tuple advance(PyTrackingRun& self, long c0, long c1, std::optional<In<double
                   std::optional<In<double>> goal_ff) {
   require_same_model(self.built, borrow_model(self.model.ptr()), "TrackingRun.advance");
   require(!self.stopped, "advance: the run has stopped; build a new TrackingRun");
-  require(c0 == self.next && c1 >= c0 && c1 <= self.record.N,
-          "advance: c0 the next sample (" + std::to_string(self.next) + ") and c0 <= c1 <= N (" +
-              std::to_string(self.record.N) + ")");
+  if (!(c0 == self.next && c1 >= c0 && c1 <= self.record.N)) {  // the message only then
+    const std::string N = self.record.ring ? "an open run: none" : std::to_string(self.record.N);
+    require(false, "advance: c0 the next sample (" + std::to_string(self.next) +
+                       ") and c0 <= c1 <= N (" + N + ")");
+  }
   const auto n = static_cast<std::size_t>(c1 - c0);
   const auto m = static_cast<std::size_t>(self.run->primary_rows());
   const Goals& goals = self.run->goals();
@@ -226,8 +146,20 @@ nb::tuple advance(PyTrackingRun& self, long c0, long c1, std::optional<In<double
                           goal_ff ? goal_ff->data() : nullptr);
   }
   self.next = a.next;
-  self.stopped = a.stop != Stop::none;
+  self.stopped = a.stop != Stop::none && !self.run->is_open();  // an open run goes on
   return nb::make_tuple(a.next, stop_name(a.stop), a.k, a.r, a.err);
+}
+
+// The constraint events from the i-th on: (t, constraint, action) (as constraint_records').
+nb::list events_since(const PyTrackingRun& self, long i) {
+  const long n = self.constraints ? static_cast<long>(self.constraints->events().size()) : 0;
+  require(i >= 0 && i <= n, "events_since: i, 0 <= i <= n_events (" + std::to_string(n) + ")");
+  nb::list out;
+  for (long e = i; e < n; ++e) {
+    const Event& ev = self.constraints->events()[static_cast<std::size_t>(e)];
+    out.append(nb::make_tuple(ev.t, self.constraints->name(ev.key), action_name(ev.action)));
+  }
+  return out;
 }
 
 // The extra goals (tasks/goals.hpp) and the objectives (loop/objectives.hpp).
@@ -405,36 +337,44 @@ void bind_configs(nb::module_& m) {
       .def_ro("names", &JointMonitorConfig::names);
 }
 
-void bind_record(nb::module_& m) {
-  nb::class_<RecordArrays>(m, "RecordArrays",
-                           "The Recorder's arrays (clik.loop.recording), written in place.")
+// What a controller reads after each tick of an open run (any run has them).
+void bind_session(nb::class_<PyTrackingRun>& run) {
+  run.def_prop_ro("next", [](const PyTrackingRun& s) { return s.next; },
+                  "The sample the next advance() starts at.")
+      .def_prop_ro("open", [](const PyTrackingRun& s) { return s.run->is_open(); })
+      .def_prop_ro("notes", [](const PyTrackingRun& s) { return s.run->monitor().notes(); },
+                   "Limit crossings noted so far (compare before and after a sample).")
+      .def_prop_ro("last_orientation_error",
+                   [](const PyTrackingRun& s) { return s.run->last_orientation_error(); },
+                   "The primary task's orientation rows' error norm at the last sample [rad].")
+      .def_prop_ro("n_events",
+                   [](const PyTrackingRun& s) {
+                     return s.constraints ? static_cast<long>(s.constraints->events().size()) : 0L;
+                   },
+                   "The constraint events so far (0 without constraints).")
       .def(
-          "__init__",
-          [](RecordArrays* self, long N, long every, Array<std::intptr_t> idx, Array<double> q,
-             Array<double> qdot, Array<double> qddot, Array<double> position,
-             std::optional<Array<double>> reference, Array<double> error,
-             std::optional<Array<double>> orientation_error,
-             std::optional<Array<std::int16_t>> active, std::optional<Array<double>> distance,
-             Array<double> joint_min, Array<double> joint_max, Array<double> qdot_prev,
-             std::optional<Array<double>> goal_error) {
-            RecordArrays r{N,         every,  idx,      q,         qdot,      qddot,
-                           position,  reference, error, orientation_error, active, distance,
-                           joint_min, joint_max, qdot_prev, goal_error};
-            r.validate();
-            new (self) RecordArrays(std::move(r));
+          "move_obstacle",
+          [](PyTrackingRun& s, const std::string& name, const Vec3& position,
+             const Vec3& velocity, const Mat3& rotation) {
+            require(position.allFinite() && velocity.allFinite() && rotation.allFinite(),
+                    "move_obstacle: finite position, velocity [m, m/s] and rotation");
+            const double tk = s.run->time(s.next);  // from the next sample on
+            if (!s.constraints ||
+                !s.constraints->move_obstacle(name, position, velocity, rotation, tk)) {
+              throw std::invalid_argument("move_obstacle: no obstacle named '" + name + "'");
+            }
           },
-          nb::kw_only(), nb::arg("N"), nb::arg("every"), nb::arg("idx").noconvert(),
-          nb::arg("q").noconvert(), nb::arg("qdot").noconvert(), nb::arg("qddot").noconvert(),
-          nb::arg("position").noconvert(), nb::arg("reference").noconvert().none(),
-          nb::arg("error").noconvert(), nb::arg("orientation_error").noconvert().none(),
-          nb::arg("active").noconvert().none(), nb::arg("distance").noconvert().none(),
-          nb::arg("joint_min").noconvert(), nb::arg("joint_max").noconvert(),
-          nb::arg("qdot_prev").noconvert(), nb::arg("goal_error").noconvert().none() = nb::none(),
-          "Each array as the Recorder allocated it (its dtype, contiguous: never converted), "
-          "reference, orientation_error, active and distance None where it has none.")
-      .def_ro("N", &RecordArrays::N)
-      .def_ro("every", &RecordArrays::every)
-      .def_prop_ro("capacity", &RecordArrays::capacity);
+          nb::arg("name"), nb::arg("position"), nb::arg("velocity"), nb::arg("rotation"),
+          "Obstacle `name` at `position` [m] at the next sample's time, moving with "
+          "`velocity` [m/s] from then on, rotated by `rotation` (3, 3).")
+      .def("events_since", &events_since, nb::arg("i"),
+           "Events i.. as (t, constraint, action) tuples (0 <= i <= n_events).")
+      .def_prop_ro("active_names",
+                   [](const PyTrackingRun& s) {
+                     return s.constraints ? s.constraints->active_names()
+                                          : std::vector<std::string>{};
+                   },
+                   "The constraints active now, in row order ([] without constraints).");
 }
 
 }  // namespace
@@ -445,20 +385,26 @@ void bind_tracking(nb::module_& m) {
   m.attr("JOINT_TOLERANCE") = JOINT_TOLERANCE;
   bind_configs(m);
   bind_record(m);
-  nb::class_<PyTrackingRun>(m, "TrackingRun")
+  nb::class_<PyTrackingRun> run(m, "TrackingRun");
+  bind_session(run);
+  run
       .def("__init__", &make_run, nb::kw_only(), nb::arg("model"), nb::arg("task"),
-           nb::arg("law"), nb::arg("stop"), nb::arg("t").noconvert(), nb::arg("record"),
-           nb::arg("joints"), nb::arg("constraints").none(),
-           nb::arg("goals") = std::vector<GoalConfig>{},
+           nb::arg("law"), nb::arg("stop"), nb::arg("t").noconvert().none() = nb::none(),
+           nb::arg("t0") = 0.0, nb::arg("record"), nb::arg("joints"),
+           nb::arg("constraints").none(), nb::arg("goals") = std::vector<GoalConfig>{},
            "model: the robot's pin.Model (borrowed); t: the time grid (N,) float64, read in "
-           "place; record: the Recorder's arrays; constraints: a ConstraintSetConfig or None.")
+           "place, or None: an open run (a controller's ticks, advance(k, k + 1), no last "
+           "sample; times t0 + k dt; record a RecordArrays(ring=True)); record: the "
+           "Recorder's arrays; constraints: a ConstraintSetConfig or None.")
       .def("advance", &advance, nb::arg("c0"), nb::arg("c1"), nb::arg("P_d").noconvert().none(),
            nb::arg("R_d").noconvert().none(), nb::arg("FF").noconvert(),
            nb::arg("at_rest").noconvert(), nb::arg("q").noconvert(),
            nb::arg("goal_ref").noconvert().none() = nb::none(),
            nb::arg("goal_ff").noconvert().none() = nb::none(),
            "Run samples [c0, c1): (next, stop, k, r, err); q is updated in place. With goals: "
-           "goal_ref (c1 - c0, D) and goal_ff (c1 - c0, M).")
+           "goal_ref (c1 - c0, D) and goal_ff (c1 - c0, M). An open run goes on after a stop "
+           "at k (next = k + 1): q_{k+1} after a deadlock or a stall, q_k held after a "
+           "divergence.")
       .def_prop_ro("goal_max", [](const PyTrackingRun& s) { return Mat(s.run->goal_max()); })
       .def_prop_ro("goal_last", [](const PyTrackingRun& s) { return Mat(s.run->goal_last()); })
       .def_prop_ro("max_error", [](const PyTrackingRun& s) { return s.run->max_error(); })
@@ -477,7 +423,8 @@ void bind_tracking(nb::module_& m) {
       .def("constraint_records",
            [](const PyTrackingRun& s) {
              if (!s.constraints) throw std::invalid_argument("the run has no constraints");
-             return constraint_records(*s.constraints, static_cast<int>(s.run->kept()));
+             const long kept = std::min(s.run->kept(), s.record.capacity());  // a ring's slots
+             return constraint_records(*s.constraints, static_cast<int>(kept));
            },
            "What the run's constraints recorded (see constraints/bind_constraints.hpp).")
       .def_prop_ro("violations", [](const PyTrackingRun& s) {
@@ -487,6 +434,7 @@ void bind_tracking(nb::module_& m) {
         }
         return out;
       });
+  bind_ticker(m);
 }
 
 }  // namespace clik

@@ -8,7 +8,7 @@ namespace clik {
 
 int update_constraints(ConstraintRun& crun, long k, const Vec& q, const pinocchio::Model&,
                        pinocchio::Data& data, ExtendedTask& ext, Law& law, bool exact) {
-  return crun.update(static_cast<int>(k), q, data, ext, law, exact);
+  return crun.update(k, q, data, ext, law, exact);
 }
 
 void observe_constraint_limits(const ConstraintRun& crun, double tk, ViolationMonitor& monitor) {
@@ -17,7 +17,7 @@ void observe_constraint_limits(const ConstraintRun& crun, double tk, ViolationMo
 
 void record_constraints(ConstraintRun& crun, Recorder& rec, long j, int active) {
   rec.constraints(j, active, crun.min_distance());
-  crun.record(static_cast<int>(j));
+  crun.record(static_cast<int>(j), rec.ring());
 }
 
 }  // namespace clik

@@ -1,6 +1,7 @@
 // The record of a run, written in place into the arrays of the Python
 // Recorder (clik/loop/recording.py, which allocates them and trims them after the
-// run): every record_every-th sample and the last; running joint extremes.
+// run): every record_every-th sample and the last; running joint extremes. An open run's
+// record is a ring: the j-th sample kept goes to slot j % capacity, over the oldest.
 #pragma once
 
 #include <cstdint>
@@ -14,9 +15,10 @@ using VecMap = Eigen::Map<Vec>;
 
 // Views of the Recorder's arrays; a null pointer where the Recorder has none.
 struct RecordBuffers {
-  long N = 0;      // samples in the run
+  long N = 0;      // samples in the run (LONG_MAX: an open run)
   long every = 1;  // record_every
   long capacity = 0;
+  bool ring = false;  // slot j % capacity (an open run)
   int nq = 0, nv = 0;
   std::intptr_t* idx = nullptr;      // (capacity)
   double* q = nullptr;               // (capacity, nq)
@@ -46,10 +48,11 @@ class Recorder {
     VecMap(b_.joint_max, b_.nq) = q;
   }
 
-  // Store sample k; returns its slot.
+  // Store sample k; returns its slot (the ring's oldest, once full). Whatever records
+  // into that slot then (goals, constraints) overwrites all of it.
   long keep(long k, const Vec& q, const Vec& qdot, const Vec3& position, const double* reference,
             double error, double orientation_error) {
-    const long j = j_;
+    const long j = b_.ring ? j_ % b_.capacity : j_;
     b_.idx[j] = k;
     VecMap(b_.q + j * b_.nq, b_.nq) = q;
     VecMap(b_.qdot + j * b_.nv, b_.nv) = qdot;
@@ -62,7 +65,7 @@ class Recorder {
     if (b_.every > 1) {
       VecMap(b_.qddot + j * b_.nv, b_.nv) = qdot - VecMap(b_.qdot_prev, b_.nv);
     }
-    j_ = j + 1;
+    ++j_;
     return j;
   }
 
@@ -81,9 +84,9 @@ class Recorder {
     if (b_.distance != nullptr) b_.distance[j] = min_distance;
   }
 
-  // Running extremes and the previous qdot (decimated runs only).
+  // Running extremes and the previous qdot (decimated runs and rings only).
   void every_sample(const Vec& q, const Vec& qdot) {
-    if (b_.every > 1) {
+    if (b_.every > 1 || b_.ring) {
       VecMap lo(b_.joint_min, b_.nq), hi(b_.joint_max, b_.nq);
       lo = lo.cwiseMin(q);
       hi = hi.cwiseMax(q);
@@ -91,7 +94,9 @@ class Recorder {
     }
   }
 
-  long kept() const { return j_; }
+  long kept() const { return j_; }  // every sample kept so far (a ring holds the last capacity)
+  bool ring() const { return b_.ring; }
+  long capacity() const { return b_.capacity; }
 
  private:
   RecordBuffers b_;

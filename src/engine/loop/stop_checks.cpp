@@ -37,7 +37,7 @@ double StopChecks::stability_margin(const ExtendedTask& ext, int r) {
   return dt_ * eig_.eigenvalues()[r - 1];
 }
 
-Stop StopChecks::instability(int k, const ExtendedTask& ext, int r, double err) {
+Stop StopChecks::instability(long k, const ExtendedTask& ext, int r, double err) {
   if (law_ == LawKind::pseudoinverse) {
     margin = ext.K.head(r).maxCoeff() * dt_;
   } else if (k % STABILITY_EVERY == 0) {
@@ -73,7 +73,7 @@ bool StopChecks::deadlock(const ExtendedTask& ext, int r, double err, double blo
   return stuck_ >= window_;
 }
 
-bool StopChecks::stall(int k, double err, bool at_rest) {
+bool StopChecks::stall(long k, double err, bool at_rest) {
   if (!(err > s_.deadlock_error && at_rest)) {
     stall_k_ = -1;
     return false;

@@ -33,11 +33,11 @@ class StopChecks {
   // The step just computed is non-finite or too large; sets jump.
   Stop divergence(const Vec& qdot, double err);
   // The gains break explicit Euler's bound and the error has grown; sets margin.
-  Stop instability(int k, const ExtendedTask& ext, int r, double err);
+  Stop instability(long k, const ExtendedTask& ext, int r, double err);
   // Remark 2 held for deadlock_window.
   bool deadlock(const ExtendedTask& ext, int r, double err, double blocked);
   // With the reference at rest, the error fell by too little over stall_window.
-  bool stall(int k, double err, bool at_rest);
+  bool stall(long k, double err, bool at_rest);
 
   double jump = 0.0;          // the last joint step max |qdot| dt [rad or m]
   double margin = 0.0;        // the last stability margin

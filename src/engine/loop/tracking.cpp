@@ -104,7 +104,7 @@ LevelPlan TrackingRun::level_plan(const pinocchio::Model& model, const TaskConfi
 }
 
 TrackingRun::TrackingRun(const pinocchio::Model& model, const TaskConfig& task,
-                         const LawConfig& law, const StopConfig& stop, const TimesView& t,
+                         const LawConfig& law, const StopConfig& stop, const Clock& t,
                          const RecordBuffers& record, JointMonitorConfig joints,
                          ConstraintRun* constraints, const std::vector<GoalConfig>& goals)
     : model_(model), data_(model), task_(checked(model, task, law, joints)),
@@ -119,6 +119,7 @@ TrackingRun::TrackingRun(const pinocchio::Model& model, const TaskConfig& task,
       monitor_(std::move(joints)),
       crun_(constraints), J6_(6, model.nv), e6_(Eigen::Matrix<double, 6, 1>::Zero()),
       qdot_(Vec::Zero(model.nv)), dq_(Vec::Zero(model.nv)), qnext_(Vec::Zero(model.nq)),
+      qv_(Vec::Zero(model.nq)),
       goal_norms_(Mat::Zero(goals_.count(), 2)), goal_max_(Mat::Zero(goals_.count(), 2)) {
   J6_.setZero();
   for (int row : task.rows) (row < 3 ? pos_rows_ : rot_rows_).push_back(row);
@@ -182,11 +183,18 @@ void TrackingRun::error_norms(double& pos, double& rot) const {
 // 5. Why the run must stop at sample k, if it must.
 Stop TrackingRun::stop(long k, double err, int r, double blocked, bool at_rest) {
   Stop why = checks_.divergence(qdot_, err);
-  if (why == Stop::none) why = checks_.instability(static_cast<int>(k), ext_, r, err);
+  if (why == Stop::none) why = checks_.instability(k, ext_, r, err);
   if (why != Stop::none) return why;
   if (checks_.deadlock(ext_, r, err, blocked)) return Stop::deadlock;
-  if (checks_.stall(static_cast<int>(k), err, at_rest)) return Stop::stall;
+  if (checks_.stall(k, err, at_rest)) return Stop::stall;
   return Stop::none;
+}
+
+// 6. q_{k+1} = q_k (+) qdot_k dt (pin.integrate), in place.
+void TrackingRun::step(Vec& q) {
+  dq_ = qdot_ * dt_;
+  pinocchio::integrate(model_, q, dq_, qnext_);
+  q.swap(qnext_);
 }
 
 // Every limit crossed at this sample: joints, obstacle surfaces, link pairs.
@@ -199,28 +207,28 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
                              const double* FF, const bool* at_rest, Eigen::Ref<Vec> q,
                              const double* goal_ref, const double* goal_ff) {
   const long N = t_.size();
-  Vec qv = q;  // the state as a Vec (one copy per chunk)
+  qv_ = q;  // the state as a Vec (its storage reused: nothing allocated per call)
   if (!started_) {
-    rec_.start(qv);
+    rec_.start(qv_);
     started_ = true;
   }
   Advance out;
   for (long k = c0; k < c1; ++k) {
     const long kk = k - c0;
     const double* p_d = P_d == nullptr ? nullptr : P_d + 3 * kk;
-    kinematics(qv);
+    kinematics(qv_);
     task_rows(p_d, R_d == nullptr ? nullptr : R_d + 9 * kk, FF + m0_ * kk);
     if (goals_.count() > 0) {
-      goals_.write(GoalContext{model_, data_, qv}, goal_ref + goals_.ref_size() * kk,
+      goals_.write(GoalContext{model_, data_, qv_}, goal_ref + goals_.ref_size() * kk,
                    goal_ff + goals_.rows() * kk, ext_, m0_);
     }
     if (!objectives_.empty()) {
-      objectives_.compute(model_, data_, qv, ext_.J.topRows(m0_), law_.objective_z());
+      objectives_.compute(model_, data_, qv_, ext_.J.topRows(m0_), law_.objective_z());
     }
     const bool exact = rec_.due(k);
     const int r = crun_ == nullptr
                       ? m_
-                      : m_ + update_constraints(*crun_, k, qv, model_, data_, ext_, law_, exact);
+                      : m_ + update_constraints(*crun_, k, qv_, model_, data_, ext_, law_, exact);
     const double blocked = law_.velocity(ext_, r, qdot_);
     if (speed_.enabled()) {
       if (law_.by_levels()) {
@@ -233,6 +241,7 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
     double err = 0.0, err_rot = 0.0;
     error_norms(err, err_rot);
     err_ = err;
+    err_rot_ = err_rot;
     max_err_ = std::max(max_err_, err);
     double err_stop = err;
     if (goals_.count() > 0) {
@@ -245,14 +254,14 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
       }
     }
     const Stop why = stop(k, err_stop, r, blocked, at_rest[kk]);
-    observe_limits(t_[k], qv);
+    observe_limits(t_[k], qv_);
     if (exact || why != Stop::none) {
-      const long j = rec_.keep(k, qv, qdot_, data_.oMf[task_.frame].translation(), p_d, err,
+      const long j = rec_.keep(k, qv_, qdot_, data_.oMf[task_.frame].translation(), p_d, err,
                                err_rot);
       if (crun_ != nullptr) record_constraints(*crun_, rec_, j, r - m_);
       if (goals_.count() > 0) rec_.goals(j, goal_norms_);
     }
-    rec_.every_sample(qv, qdot_);
+    rec_.every_sample(qv_, qdot_);
     steps_ = k + 1;
     if (why != Stop::none) {
       out.next = k + 1;
@@ -260,17 +269,15 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
       out.k = k;
       out.r = r;
       out.err = err_stop;
-      q = qv;
+      // an open run goes on: past a deadlock or a stall as usual; a divergence holds q_k
+      if (t_.is_open() && (why == Stop::deadlock || why == Stop::stall)) step(qv_);
+      q = qv_;
       return out;
     }
-    if (k + 1 < N) {
-      dq_ = qdot_ * dt_;
-      pinocchio::integrate(model_, qv, dq_, qnext_);
-      qv.swap(qnext_);
-    }
+    if (k + 1 < N) step(qv_);  // always in an open run (N: LONG_MAX)
   }
   out.next = c1;
-  q = qv;
+  q = qv_;
   return out;
 }
 

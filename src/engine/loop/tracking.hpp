@@ -7,7 +7,9 @@
 //   5. stop checks and limits crossed;
 //   6. recording, then q_{k+1} = q_k (+) qdot_k dt.
 // Python samples the reference in chunks and calls advance() per chunk;
-// nothing is allocated per sample.
+// nothing is allocated per sample. An open run (Clock::open: a controller's session, no
+// last sample, a ring record) is advanced one tick at a time, advance(k, k + 1), with the
+// same per-sample code; a stop there is reported and the run goes on (see advance).
 #pragma once
 
 #include <memory>
@@ -54,7 +56,7 @@ using StopConfig = StopSettings;  // `_engine.StopConfig`
 
 // Where a run is after advance().
 struct Advance {
-  long next = 0;        // the next sample to run (== c1 when the chunk is done)
+  long next = 0;        // the next sample to run (c1 when the chunk is done, k + 1 at a stop)
   Stop stop = Stop::none;
   long k = -1;          // the sample it stopped at
   int r = 0;            // rows of the extended task then
@@ -69,13 +71,16 @@ class TrackingRun {
   // goals: the extra goals after the primary task (issue 24), in row order (level by level).
   // constraints: built with offset m (every task row) and the primary's rows (task_m).
   TrackingRun(const pinocchio::Model& model, const TaskConfig& task, const LawConfig& law,
-              const StopConfig& stop, const TimesView& t, const RecordBuffers& record,
+              const StopConfig& stop, const Clock& t, const RecordBuffers& record,
               JointMonitorConfig joints, ConstraintRun* constraints,
               const std::vector<GoalConfig>& goals = {});
 
   // Runs samples [c0, c1) with the chunk's reference: P_d (n, 3) or null, R_d
   // (n, 3, 3) row-major or null, FF (n, m0), at_rest (n); with goals goal_ref (n, D) and
   // goal_ff (n, M) (D, M: the goals' reference doubles and rows). q is the state, updated.
+  // An offline run returns at a stop, q_k unchanged. An open run returns at a stop with
+  // next = k + 1 and goes on: after a deadlock or a stall q_{k+1} as usual (the controller
+  // keeps going); after a divergence (non_finite, joint_step, unstable) q_k (it holds).
   Advance advance(long c0, long c1, const double* P_d, const double* R_d, const double* FF,
                   const bool* at_rest, Eigen::Ref<Vec> q, const double* goal_ref = nullptr,
                   const double* goal_ff = nullptr);
@@ -90,6 +95,9 @@ class TrackingRun {
 
   double max_error() const { return max_err_; }
   double last_error() const { return err_; }
+  double last_orientation_error() const { return err_rot_; }  // the primary's rotation rows
+  bool is_open() const { return t_.is_open(); }
+  double time(long k) const { return t_[k]; }  // t_k [s]
   long steps() const { return steps_; }
   long kept() const { return rec_.kept(); }
   const ExtendedTask& extended() const { return ext_; }
@@ -103,6 +111,7 @@ class TrackingRun {
   void task_rows(const double* p_d, const double* R_d, const double* xdot_d);
   void error_norms(double& pos, double& rot) const;
   Stop stop(long k, double err, int r, double blocked, bool at_rest);
+  void step(Vec& q);
   void observe_limits(double tk, const Vec& q);
   static const TaskConfig& checked(const pinocchio::Model& model, const TaskConfig& task,
                                    const LawConfig& law, const JointMonitorConfig& joints);
@@ -116,7 +125,7 @@ class TrackingRun {
   int m0_, m_;
   LevelPlan plan_;
   double dt_;
-  TimesView t_;
+  Clock t_;
   ExtendedTask ext_;
   Law law_;
   Objectives objectives_;
@@ -127,12 +136,12 @@ class TrackingRun {
   ConstraintRun* crun_;
   Eigen::Matrix<double, 6, Eigen::Dynamic> J6_;
   Eigen::Matrix<double, 6, 1> e6_;
-  Vec qdot_, dq_, qnext_;
+  Vec qdot_, dq_, qnext_, qv_;  // qv_: the state in advance()
   std::vector<int> pos_rows_, rot_rows_;
   int first_goals_ = 0;  // goals in the first level (their errors count in the stop checks)
   bool full_kinematics_ = false;
   Mat goal_norms_, goal_max_;  // (G, 2)
-  double max_err_ = 0.0, err_ = 0.0;
+  double max_err_ = 0.0, err_ = 0.0, err_rot_ = 0.0;
   long steps_ = 0;
   bool started_ = false;
 };
