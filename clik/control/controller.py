@@ -139,22 +139,23 @@ class Controller:
         )  # fmt: skip
         ticks = PythonTicks if tr.engine == "python" else CompiledTicks
         self._ticks = ticks(self._run, q0)
-        self._fast = None  # the engine reads one frame task's target itself
-        self._q = self._ticks.q  # the engine's (written in place) or the Python loop's
-        if isinstance(self._ticks, CompiledTicks):
-            self._qdot = self._ticks.qdot_buffer
-            if tr.stack is None:
-                self._fast = self._ticks.ticker.step
-        self._name = self.names[0]
-        self._constrained = tr.constraints is not None
-        self.k = 0
-        """The next tick's index (its time is ``k dt``)."""
-        self._seen = 0
+        self.__dict__.pop("step", None)
+        if isinstance(self._ticks, CompiledTicks) and tr.stack is None:
+            # the fast path: step() is the engine's own call, which hands anything but a
+            # one-task float64 target to _general_step (the method below)
+            ticker = self._ticks.ticker
+            ticker.serving(self)
+            self.step = ticker.serve  # type: ignore[method-assign]
         self._worst: tuple[str, str] = ("ok", "")
         self._wall = 0.0
         self._current: dict[str, Obstacle] = {}  # the obstacles moved in this session
         self._previous: tuple[np.ndarray | None, ...] | None = None  # a packed tick's
         self._previous_k = -1  # ... and its index (a tick of the engine's fast path between)
+
+    @property
+    def k(self) -> int:
+        """The next tick's index (its time is ``k dt``)."""
+        return self._ticks.k
 
     @property
     def q(self) -> np.ndarray:
@@ -216,26 +217,16 @@ class Controller:
         """
         if obstacles is not None:
             self._move(obstacles)
-        fast = self._fast
-        if fast is not None and type(targets) is np.ndarray:  # the engine reads the target
-            try:
-                out = fast(targets, velocities)
-            except TypeError:  # not float64 and C-contiguous: the general path converts
-                out = None
-            if out is not None:  # else: a shape the task does not take, named below
-                code, err, err_rot, n_events, tk = out
-                k = self.k
-                self.k = k + 1
-                verdict, reason = ("ok", "") if code == 0 else self._engine_verdict(code, tk)
-                events: list[dict[str, Any]] = []
-                if n_events != self._seen:
-                    events = self._ticks.events_since(self._seen)
-                    self._seen = n_events
-                return Tick(
-                    self._q.copy(), self._qdot.copy(), tk, k, verdict, reason, events,
-                    self._ticks.active() if self._constrained else [], {self._name: (err, err_rot)},
-                )  # fmt: skip
         return self._step(targets, velocities)
+
+    _general_step = step  # the fast path's fallback (the engine's Ticker.serve calls it)
+
+    def _tick_verdict(self, tick: Any) -> None:
+        """A fast-path tick's verdict other than ok: its reason, kept if the worst."""
+        ticks: Any = self._ticks  # CompiledTicks
+        verdict, reason = ticks.verdict_of(tick.code, tick.t)
+        tick.reason = reason
+        self._note(verdict, reason)
 
     def _move(self, obstacles: Any) -> None:
         """:meth:`step`'s ``obstacles``: each moved, from this tick on."""
@@ -250,13 +241,6 @@ class Controller:
             position, velocity = value if pair else (value, None)
             self.move_obstacle(name, position, velocity=velocity)
 
-    def _engine_verdict(self, code: int, tk: float) -> tuple[str, str]:
-        """The engine's verdict ``code`` in words, kept if the session's worst."""
-        ticks: Any = self._ticks  # CompiledTicks
-        verdict, reason = ticks.verdict_of(code, tk)
-        self._note(verdict, reason)
-        return verdict, reason
-
     def _step(self, targets: Any, velocities: Any) -> Tick:
         """:meth:`step` with the targets packed in Python (any tasks, any form)."""
         start = time.perf_counter()
@@ -264,10 +248,8 @@ class Controller:
         tk = self._run.t[k]
         refs = self._references(targets, velocities, tk)
         verdict, reason = ticks.tick(k, refs)
-        self.k = k + 1
         self._note(verdict, reason)
-        events = ticks.events_since(self._seen)
-        self._seen += len(events)
+        events = ticks.new_events()
         errors = dict(zip(self.names, ticks.errors(), strict=True))
         self._wall += time.perf_counter() - start
         return Tick(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from abc import ABCMeta
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -13,8 +14,12 @@ VERDICTS = ("ok", "deadlock", "violated", "diverged", "off_track")
 
 
 @dataclass(slots=True)
-class Tick:
+class Tick(metaclass=ABCMeta):
     """One tick: the next joints, this tick's events and errors, and a verdict.
+
+    The compiled engine's one-task fast path returns its own form, ``clik._engine.Tick``,
+    with the same attributes (read-only but ``reason``); ``isinstance(tick, Tick)`` holds
+    for both.
 
     Attributes:
         q: ``q_{k+1}``, the joints to command next (nq,) [rad or m]; ``q_k`` itself

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clik.constraints.violations import ViolationRecord
+from clik.control.tick import Tick
 from clik.engine import load
 from clik.loop.compiled_run import CompiledConstraints, engine_run, stopped, synced
 
@@ -34,6 +35,8 @@ class PythonTicks:
         self.run = run
         self.q = np.array(q, dtype=float)
         run.rec.start(self.q)
+        self._next = 0  # the next tick
+        self.seen = 0  # events given in ticks so far
         self.notes = 0
         self.above_since: float | None = None
 
@@ -52,7 +55,13 @@ class PythonTicks:
             )  # fmt: skip
             if stop is None or stop[0] != "diverged":
                 self.q = run.integrate(self.q)
+        self._next = k + 1
         return self.verdict(stop, float(run.t[k]))
+
+    @property
+    def k(self) -> int:
+        """The next tick."""
+        return self._next
 
     def verdict(self, stop: tuple[str, str] | None, tk: float) -> tuple[str, str]:
         """The worst verdict that holds at ``tk``: a check's, a limit crossed, off_track."""
@@ -80,10 +89,14 @@ class PythonTicks:
         """``qdot_k`` of the last tick (a copy)."""
         return self.run.qdot.copy()
 
-    def events_since(self, n: int) -> list[dict[str, Any]]:
-        """Constraint events after the first ``n``."""
+    def new_events(self) -> list[dict[str, Any]]:
+        """The constraint events since the last tick that gave them."""
         crun = self.run.crun
-        return [] if crun is None else list(crun.events[n:])
+        if crun is None:
+            return []
+        events = list(crun.events[self.seen :])
+        self.seen += len(events)
+        return events
 
     def active(self) -> list[str]:
         """The constraints active at the last tick."""
@@ -119,11 +132,17 @@ class CompiledTicks(PythonTicks):
         self.q = np.array(q, dtype=float)
         self.native = engine_run(run)
         self.qdot_buffer = np.zeros(run.robot.nv)  # written by the engine at each tick
-        tol = run.tolerance
-        self.ticker = load().Ticker(
+        tol, engine = run.tolerance, load()
+        Tick.register(engine.Tick)  # the fast path's ticks are Ticks
+        self.ticker = engine.Ticker(
             self.native, self.q, self.qdot_buffer, tol.position, tol.orientation,
             tol.settling_time,
         )  # fmt: skip
+
+    @property
+    def k(self) -> int:
+        """The next tick (the engine's run counts them)."""
+        return int(self.native.next)
 
     def tick(self, k: int, refs: tuple[Any, ...]) -> tuple[str, str]:
         """Sample ``k`` in the engine; :attr:`q` is updated in place to the next joints."""
@@ -155,12 +174,15 @@ class CompiledTicks(PythonTicks):
         """``qdot_k`` of the last tick (a copy)."""
         return self.qdot_buffer.copy()
 
-    def events_since(self, n: int) -> list[dict[str, Any]]:
-        """Constraint events after the first ``n``."""
-        return [
+    def new_events(self) -> list[dict[str, Any]]:
+        """The constraint events since the last tick that gave them (either path)."""
+        ticker = self.ticker
+        events = [
             {"t": t, "constraint": name, "action": action}
-            for t, name, action in self.native.events_since(n)
+            for t, name, action in self.native.events_since(ticker.seen)
         ]
+        ticker.seen += len(events)
+        return events
 
     def active(self) -> list[str]:
         """The constraints active at the last tick."""

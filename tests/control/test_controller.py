@@ -132,6 +132,74 @@ def test_a_target_out_of_reach_and_back(engine: str) -> None:
     assert "deadlock at t = " in result.reason
 
 
+def circle_ticks(ctl: clik.Controller, line: object, n: int) -> list:
+    """``n`` ticks on the line's samples, each target a 4x4 array with its velocity."""
+    ref = line.sample(np.arange(n) * ctl.dt)  # type: ignore[attr-defined]
+    out = []
+    for k in range(n):
+        target = pin.SE3(ref.rotation[k], ref.position[k]).homogeneous
+        out.append(ctl.step(target, np.concatenate([ref.linear_velocity[k], ref.angular_velocity[k]])))
+    return out
+
+
+def test_the_fast_path_gives_the_ticks_the_python_engine_gives() -> None:
+    """A one-task float64 target runs in the engine, which makes the tick itself: a Tick,
+    its own q, the same joints, events, active rows and errors as the specification's."""
+    run = build(scenario_path("panda_circle"))
+    line = Prefix(run.trajectory, 1.0)
+    constraints = obstacle_set(run.robot, OBSTACLES_ONE_ACTIVE)
+    ticks = {}
+    for engine in ENGINES:
+        ctl = clik.Controller(
+            run.task, gain=1000.0, engine=engine, constraints=constraints, q0=run.q0
+        )
+        ticks[engine] = circle_ticks(ctl, line, 1000)
+    fast, spec = ticks["compiled"], ticks["python"]
+    assert type(fast[0]).__module__ == "clik._engine"  # the engine's own tick
+    assert all(isinstance(t, clik.Tick) for t in fast + spec)
+    assert not any(np.shares_memory(a.q, b.q) for a, b in zip(fast, fast[1:], strict=False))
+    assert any(t.events for t in fast) and any(t.active for t in fast)
+    for a, b in zip(fast, spec, strict=True):
+        assert (a.k, a.t, a.verdict, a.reason, a.ok) == (b.k, b.t, "ok", "", True)
+        assert np.abs(a.q - b.q).max() <= 1e-9 and np.abs(a.qdot - b.qdot).max() <= 1e-9
+        assert a.events == b.events and a.active == b.active
+        assert a.errors.keys() == b.errors.keys() == {"task"}
+        assert np.allclose(a.errors["task"], b.errors["task"], rtol=0.0, atol=1e-9)
+
+
+def test_the_fast_path_hands_other_targets_to_the_general_step() -> None:
+    """A pin.SE3, a list, moved obstacles: the general step, on the same clock; a verdict
+    other than ok gets its reason; a dropped controller is freed (no reference cycle)."""
+    import gc
+    import weakref
+
+    run = build(scenario_path("panda_circle"))
+    constraints = obstacle_set(run.robot, OBSTACLES_ONE_ACTIVE)
+    ctl = clik.Controller(run.task, gain=1000.0, constraints=constraints, q0=run.q0)
+    pose = run.task.placement(run.q0)
+    a = ctl.step(pose.homogeneous)
+    b = ctl.step(pose)  # pin.SE3: packed in Python
+    c = ctl.step(pose.homogeneous.tolist())
+    name = constraints.obstacles[0].name
+    d = ctl.step(pose.homogeneous, obstacles={name: [2.0, 2.0, 2.0]})
+    assert [t.k for t in (a, b, c, d)] == [0, 1, 2, 3] and ctl.k == 4
+    assert type(a).__module__ == "clik._engine" and type(b) is clik.Tick
+    twin = clik.Controller(run.task, gain=1000.0, constraints=constraints, q0=run.q0)
+    same = [twin.step(pose.homogeneous) for _ in range(3)]  # all on the fast path
+    assert all(np.abs(t.q - u.q).max() <= 1e-12 for t, u in zip((a, b, c), same, strict=True))
+    assert np.all(np.isfinite(d.q))
+    far = pose.homogeneous.copy()
+    far[:3, 3] += [2.0, 0.0, 0.0]
+    verdicts = [ctl.step(far) for _ in range(1500)]
+    stuck = [t for t in verdicts if t.verdict != "ok"]
+    assert stuck and all(t.reason and not t.ok for t in stuck)
+    assert stuck[0].verdict in ("deadlock", "off_track"), stuck[0].reason
+    gone = weakref.ref(ctl)
+    del ctl, verdicts, stuck, a, d
+    gc.collect()
+    assert gone() is None
+
+
 @pytest.mark.parametrize("engine", ENGINES)
 def test_the_record_is_a_ring_of_the_last_ticks(engine: str) -> None:
     run, tracker, offline = case_study_run_4(engine)

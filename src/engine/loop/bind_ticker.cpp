@@ -2,16 +2,24 @@
 // one sample of an open run per call, `TrackingRun::advance(k, k + 1)`, and the tick's
 // verdict (docs/method.md, "Online control"; the Python form: Controller._verdict and
 // Controller._off_track in clik/control/controller.py). `step` reads a frame task's target
-// directly (the fast path); `step_arrays` takes the references Python packed (any tasks).
+// directly (the fast path) and returns the tick itself (`_engine.Tick`: its joints in rows
+// of blocks of numpy arrays, its verdict, events and active rows as Python objects, built
+// here); `step_arrays` takes the references Python packed (any tasks).
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
+#include <nanobind/stl/string.h>
 
 #include "boundary.hpp"
 #include "loop/py_tracking_run.hpp"
@@ -31,6 +39,64 @@ struct TickTolerance {
   double position, orientation, settling;
 };
 
+constexpr const char* VERDICT_NAMES[] = {"ok", "deadlock", "violated", "diverged", "off_track"};
+
+// A row of a block of rows (RowBlocks): its numpy view made when first asked.
+struct LazyRow {
+  nb::object block;
+  long row = 0;
+  nb::object view;
+
+  nb::object get() {
+    if (!view.is_valid()) {
+      PyObject* v = PySequence_GetItem(block.ptr(), row);
+      if (v == nullptr) throw nb::python_error();
+      view = nb::steal(v);
+    }
+    return view;
+  }
+};
+
+// Rows handed out one per tick: a (BLOCK, n) float64 array, a new one when used up (a
+// tick's row keeps its block alive; a block no tick holds is freed). A row is written
+// once: each tick's q is its own array, nothing copied when it is read.
+class RowBlocks {
+ public:
+  static constexpr long BLOCK = 256;
+
+  LazyRow next(const double* values, long n, const nb::object& empty) {
+    if (row_ == BLOCK) {
+      block_ = empty(nb::make_tuple(BLOCK, n));
+      data_ = nb::cast<WrittenArray<double>>(block_).data();
+      row_ = 0;
+    }
+    std::memcpy(data_ + row_ * n, values, static_cast<std::size_t>(n) * sizeof(double));
+    return LazyRow{block_, row_++, nb::object()};
+  }
+
+ private:
+  nb::object block_;
+  double* data_ = nullptr;
+  long row_ = BLOCK;
+};
+
+// One tick as the fast path returns it (`_engine.Tick`: clik.control.tick.Tick's
+// attributes). Its lists and arrays are made when first read (then kept).
+struct PyTick {
+  LazyRow q, qdot;
+  double t = 0.0;
+  long k = 0;
+  int code = 0;
+  nb::object verdict, reason;
+  nb::object ticker;             // the PyTicker: the names and the run's events
+  long ev0 = 0, ev1 = 0;         // this tick's events: the run's [ev0, ev1)
+  int n_active = 0;              // the active rows' keys: keys, then more_keys
+  std::array<int, 8> keys{};
+  std::vector<int> more_keys;
+  nb::object events, active;     // made when first read
+  double err = 0.0, err_rot = 0.0;
+};
+
 struct PyTicker {
   nb::object owner;  // the PyTrackingRun (kept alive)
   PyTrackingRun* run;
@@ -43,6 +109,14 @@ struct PyTicker {
   double wall = 0.0;  // time in the ticks [s]
   double above_since = std::numeric_limits<double>::quiet_NaN();
   Advance last;
+  nb::object empty;                 // numpy.empty
+  nb::object verdicts[5];           // the verdicts' names
+  nb::object no_reason, task_name;  // "" and the one task's name
+  RowBlocks q_rows, qdot_rows;
+  long seen = 0;                       // events already given in a tick
+  std::vector<nb::object> key_names;  // the constraints' names, by key (built when asked)
+  PyObject* self_py = nullptr;        // this ticker's Python object (borrowed)
+  nb::object controller_ref;          // a weakref to the controller served (serve)
 
   // The verdict of the sample just run at time tk (the worst that holds).
   int judge(double tk) {
@@ -86,11 +160,77 @@ struct PyTicker {
   }
 
   Eigen::Map<Vec> joints() { return {q.data(), static_cast<Eigen::Index>(q.shape(0))}; }
+
+  // The constraint named by key, as a Python string made once.
+  const nb::object& key_name(int key) {
+    const auto at = static_cast<std::size_t>(key);
+    if (at >= key_names.size()) key_names.resize(at + 1);
+    if (!key_names[at].is_valid()) key_names[at] = nb::str(run->constraints->name(key).c_str());
+    return key_names[at];
+  }
+
+  // The run's events [e0, e1) as {t, constraint, action} dicts.
+  nb::list events(long e0, long e1) {
+    nb::list out;
+    const auto& all = run->constraints->events();
+    for (long e = e0; e < e1; ++e) {
+      const Event& ev = all[static_cast<std::size_t>(e)];
+      nb::dict d;
+      d["t"] = ev.t;
+      d["constraint"] = key_name(ev.key);
+      d["action"] = action_name(ev.action);
+      out.append(d);
+    }
+    return out;
+  }
+
+  // After the sample k: the tick (the fast path). Its events and active keys are noted
+  // here, their Python lists made when read.
+  nb::object tick(long k, Advance a, std::chrono::steady_clock::time_point start) {
+    run->next = a.next;
+    last = a;
+    const TrackingRun& r = *run->run;
+    Eigen::Map<Vec>(qdot.data(), static_cast<Eigen::Index>(qdot.shape(0))) = r.qdot();
+    if (self_py == nullptr) self_py = nb::find(this).ptr();  // borrowed: ticks hold it
+    const double tk = r.time(k);
+    PyTick out;
+    out.code = judge(tk);
+    out.t = tk;
+    out.k = k;
+    out.err = r.last_error();
+    out.err_rot = r.last_orientation_error();
+    out.q = q_rows.next(q.data(), static_cast<long>(q.shape(0)), empty);
+    out.qdot = qdot_rows.next(qdot.data(), static_cast<long>(qdot.shape(0)), empty);
+    out.verdict = verdicts[out.code];
+    out.reason = no_reason;
+    out.ticker = nb::borrow(self_py);
+    if (const ConstraintRun* c = run->constraints.get()) {
+      out.ev0 = seen;
+      out.ev1 = seen = static_cast<long>(c->events().size());
+      for (const Candidate& cand : c->active()) {
+        if (out.n_active < static_cast<int>(out.keys.size())) {
+          out.keys[static_cast<std::size_t>(out.n_active)] = cand.key;
+        } else {
+          out.more_keys.push_back(cand.key);
+        }
+        ++out.n_active;
+      }
+    }
+    wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return nb::cast(std::move(out));
+  }
+
+  // The controller this ticker serves (held weakly: it holds the ticker).
+  nb::handle controller() const {
+    PyObject* c = controller_ref.is_valid() ? PyWeakref_GetObject(controller_ref.ptr()) : nullptr;
+    if (c == nullptr || c == Py_None) throw std::invalid_argument("Ticker: its controller is gone");
+    return c;
+  }
 };
 
 void make_ticker(PyTicker* self, nb::object owner, WrittenArray<double> q,
                  WrittenArray<double> qdot, double tol_position, double tol_orientation,
-                 double settling_time) {
+                 double settling_time, const std::string& name) {
   PyTrackingRun& run = nb::cast<PyTrackingRun&>(owner);
   require(run.run->is_open(), "Ticker: an open TrackingRun (t None)");
   require(q.ndim() == 1 && static_cast<long>(q.shape(0)) == run.record.nq() &&
@@ -103,12 +243,16 @@ void make_ticker(PyTicker* self, nb::object owner, WrittenArray<double> q,
           "Ticker: tolerance (position [m], orientation [rad]) and settling_time [s], > 0");
   new (self) PyTicker{owner, &run, &model, q, qdot, {tol_position, tol_orientation, settling_time},
                       TickInput(run.run->task())};
+  self->empty = nb::module_::import_("numpy").attr("empty");
+  for (int v = 0; v < 5; ++v) self->verdicts[v] = nb::str(VERDICT_NAMES[v]);
+  self->no_reason = nb::str("");
+  self->task_name = nb::str(name.c_str());
+  self->seen = run.constraints ? static_cast<long>(run.constraints->events().size()) : 0;
 }
 
 // The fast path: a frame task's target (16, 3 or 9 doubles) and velocity (6, 3 or none);
 // None when they do not fit the task (Python then gives the error, naming the field).
-std::optional<nb::tuple> step(PyTicker& self, In<double> target,
-                              std::optional<In<double>> velocity) {
+nb::object step(PyTicker& self, In<double> target, std::optional<In<double>> velocity) {
   PyTrackingRun& run = *self.run;
   self.check_model();
   if (run.run->goals().count() != 0) {  // no std::string built on the fast path
@@ -117,14 +261,36 @@ std::optional<nb::tuple> step(PyTicker& self, In<double> target,
   const long vn = velocity ? static_cast<long>(velocity->size()) : 0;
   if (!self.input.set(target.data(), static_cast<long>(target.size()),
                       velocity ? velocity->data() : nullptr, vn)) {
-    return std::nullopt;
+    return nb::none();
   }
   const auto start = std::chrono::steady_clock::now();
   const long k = run.next;
   auto q = self.joints();
   const Advance a = run.run->advance(k, k + 1, self.input.position(), self.input.rotation(),
                                      self.input.ff(), self.input.at_rest(), q);
-  return self.ran(k, a, start);
+  return self.tick(k, a, start);
+}
+
+// Controller.step itself (the instance's, set by Controller.reset): a one-task target as
+// a float64 C-contiguous array goes straight to the engine; anything else (a pin.SE3, a
+// list, moved obstacles, a shape the task does not take) to the controller's general step,
+// which checks it and names what is wrong. A verdict other than ok gets its reason there.
+nb::object serve(PyTicker& self, nb::handle targets, nb::handle velocities, nb::handle obstacles) {
+  const auto general = [&]() {
+    return self.controller().attr("_general_step")(targets, velocities, obstacles);
+  };
+  In<double> target;
+  if (!obstacles.is_none() || !nb::try_cast(targets, target, false)) return general();
+  std::optional<In<double>> velocity;
+  if (!velocities.is_none()) {
+    In<double> v;
+    if (!nb::try_cast(velocities, v, false)) return general();
+    velocity = v;
+  }
+  nb::object tick = step(self, target, velocity);
+  if (tick.is_none()) return general();
+  if (nb::cast<PyTick&>(tick).code != 0) self.controller().attr("_tick_verdict")(tick);
+  return tick;
 }
 
 // Any tasks: one sample's references as Python packed them (as advance takes them).
@@ -159,32 +325,101 @@ nb::tuple step_arrays(PyTicker& self, std::optional<In<double>> P_d, std::option
 
 }  // namespace
 
+void bind_tick(nb::module_& m) {
+  const auto ticker = [](const PyTick& s) -> PyTicker& { return nb::cast<PyTicker&>(s.ticker); };
+  nb::class_<PyTick>(m, "Tick",
+                     "One tick of a clik.Controller (its fast path): the attributes of "
+                     "clik.control.tick.Tick.")
+      .def_prop_ro("q", [](PyTick& s) { return s.q.get(); },
+                   "q_{k+1}, the joints to command next (nq,) [rad or m]: this tick's own "
+                   "array.")
+      .def_prop_ro("qdot", [](PyTick& s) { return s.qdot.get(); },
+                   "qdot_k, the law's joint velocity (nv,) [rad/s or m/s].")
+      .def_ro("t", &PyTick::t, "This tick's time t_k [s].")
+      .def_ro("k", &PyTick::k, "This tick's index.")
+      .def_ro("code", &PyTick::code,
+              "The verdict's code: 0 ok, 1 deadlock, 2 violated, 3 diverged, 4 off_track.")
+      .def_ro("verdict", &PyTick::verdict, "ok, deadlock, violated, diverged or off_track.")
+      .def_rw("reason", &PyTick::reason, "What happened, with numbers (\"\" when ok).")
+      .def_prop_ro("events",
+                   [ticker](PyTick& s) {
+                     if (!s.events.is_valid()) {
+                       s.events = s.ev1 > s.ev0 ? nb::object(ticker(s).events(s.ev0, s.ev1))
+                                                : nb::object(nb::list());
+                     }
+                     return s.events;
+                   },
+                   "This tick's constraint events, {t, constraint, action} dicts.")
+      .def_prop_ro("active",
+                   [ticker](PyTick& s) {
+                     if (!s.active.is_valid()) {
+                       nb::list out;
+                       for (int i = 0; i < s.n_active; ++i) {
+                         const auto at = static_cast<std::size_t>(i);
+                         const int key = at < s.keys.size() ? s.keys[at]
+                                                            : s.more_keys[at - s.keys.size()];
+                         out.append(ticker(s).key_name(key));
+                       }
+                       s.active = std::move(out);
+                     }
+                     return s.active;
+                   },
+                   "The constraints whose rows are active at this tick, in row order.")
+      .def_prop_ro("errors",
+                   [ticker](const PyTick& s) {
+                     nb::dict d;
+                     d[ticker(s).task_name] = nb::make_tuple(s.err, s.err_rot);
+                     return d;
+                   },
+                   "The task's error norms by name, {name: (position [m], orientation [rad])} "
+                   "(a new dict at each read).")
+      .def_prop_ro("ok", [](const PyTick& s) { return s.code == 0; },
+                   "Whether the verdict is ok.")
+      .def("__repr__", [](const PyTick& s) {
+        return "Tick(k=" + std::to_string(s.k) + ", t=" + std::to_string(s.t) +
+               ", verdict=" + nb::cast<std::string>(s.verdict) + ")";
+      });
+}
+
 void bind_ticker(nb::module_& m) {
   m.attr("ROTATION_TOLERANCE") = ROTATION_TOLERANCE;
+  bind_tick(m);
   nb::class_<PyTicker>(m, "Ticker", "A controller's ticks on an open TrackingRun.")
       .def("__init__", &make_ticker, nb::arg("run"), nb::arg("q").noconvert(),
            nb::arg("qdot").noconvert(),
            nb::arg("tol_position"), nb::arg("tol_orientation"), nb::arg("settling_time"),
+           nb::arg("name") = "task",
            "run: an open TrackingRun; q: the controller's joints (nq,), updated in place; qdot "
-           "(nv,): each tick's joint velocity, written.")
+           "(nv,): each tick's joint velocity, written; name: the one task's name (the key of "
+           "Tick.errors).")
       .def("step", &step, nb::arg("target").noconvert(),
            nb::arg("velocity").noconvert().none() = nb::none(),
            "One tick of a one-task run: target a 4x4 pose, a position (3,) or a rotation "
-           "(3, 3) (float64, C-contiguous), velocity (6,) or (3,) or None. Returns "
-           "(verdict, error, orientation_error, n_events, t_k), or None when the target or the "
-           "velocity does not fit the task (nothing run). verdict: 0 ok, 1 deadlock, 2 "
-           "violated, 3 diverged, 4 off_track.")
+           "(3, 3) (float64, C-contiguous), velocity (6,) or (3,) or None. Returns the Tick "
+           "(its reason left to the caller when its code is not 0), or None when the target or "
+           "the velocity does not fit the task (nothing run).")
       .def("step_arrays", &step_arrays, nb::arg("P_d").noconvert().none(),
            nb::arg("R_d").noconvert().none(), nb::arg("FF").noconvert(),
            nb::arg("at_rest").noconvert(), nb::arg("goal_ref").noconvert().none() = nb::none(),
            nb::arg("goal_ff").noconvert().none() = nb::none(),
-           "One tick with the references Python packed; returns as step.")
+           "One tick with the references Python packed; returns (verdict code, error, "
+           "orientation_error, n_events, t_k) (the caller makes the tick).")
       .def_prop_ro("stop",
                    [](const PyTicker& s) {
                      const Advance& a = s.last;
                      return nb::make_tuple(a.next, stop_name(a.stop), a.k, a.r, a.err);
                    },
                    "The last tick's stop, as advance returns it: (next, stop, k, r, err).")
+      .def_rw("seen", &PyTicker::seen, "The constraint events given in ticks so far.")
+      .def("serve", &serve, nb::arg("targets"), nb::arg("velocities") = nb::none(),
+           nb::arg("obstacles") = nb::none(),
+           "Controller.step on the compiled engine's fast path (see clik.Controller.step): a "
+           "one-task target as a float64 C-contiguous array runs here, anything else in the "
+           "controller's _general_step.")
+      .def(
+          "serving",
+          [](PyTicker& s, nb::handle controller) { s.controller_ref = nb::weakref(controller); },
+          nb::arg("controller"), "The controller whose steps serve() takes (held weakly).")
       .def_prop_ro("wall", [](const PyTicker& s) { return s.wall; },
                    "Time spent in the ticks so far [s].")
       .def_prop_ro("above_since", [](const PyTicker& s) { return s.above_since; },
