@@ -27,7 +27,8 @@ def _controller_run(
 ) -> RunOutcome:
     """One session over the whole reference: ``reset(q0)``, then one ``step`` per sample."""
     ctl.reset(q0)
-    poses, velocities = reference.matrices, reference.velocities
+    # one array per tick, as a caller holds them (pink's and mink's targets are lists too)
+    poses, velocities = list(reference.matrices), list(reference.velocities)
     n = reference.ticks
     commanded = [q0]  # each tick's q is its own array: keeping it costs less than a copy
     tick = None

@@ -8,6 +8,8 @@ joints within their limits throughout.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -138,7 +140,8 @@ def circle_ticks(ctl: clik.Controller, line: object, n: int) -> list:
     out = []
     for k in range(n):
         target = pin.SE3(ref.rotation[k], ref.position[k]).homogeneous
-        out.append(ctl.step(target, np.concatenate([ref.linear_velocity[k], ref.angular_velocity[k]])))
+        velocity = np.concatenate([ref.linear_velocity[k], ref.angular_velocity[k]])
+        out.append(ctl.step(target, velocity))
     return out
 
 
@@ -157,7 +160,7 @@ def test_the_fast_path_gives_the_ticks_the_python_engine_gives() -> None:
     fast, spec = ticks["compiled"], ticks["python"]
     assert type(fast[0]).__module__ == "clik._engine"  # the engine's own tick
     assert all(isinstance(t, clik.Tick) for t in fast + spec)
-    assert not any(np.shares_memory(a.q, b.q) for a, b in zip(fast, fast[1:], strict=False))
+    assert not any(np.shares_memory(a.q, b.q) for a, b in itertools.pairwise(fast))
     assert any(t.events for t in fast) and any(t.active for t in fast)
     for a, b in zip(fast, spec, strict=True):
         assert (a.k, a.t, a.verdict, a.reason, a.ok) == (b.k, b.t, "ok", "", True)
@@ -183,6 +186,9 @@ def test_the_fast_path_hands_other_targets_to_the_general_step() -> None:
     name = constraints.obstacles[0].name
     d = ctl.step(pose.homogeneous, obstacles={name: [2.0, 2.0, 2.0]})
     assert [t.k for t in (a, b, c, d)] == [0, 1, 2, 3] and ctl.k == 4
+    with pytest.raises(clik.errors.InputError, match="targets"):
+        ctl.step(pose.homogeneous.ravel())  # 16 numbers, not a 4x4: named, nothing run
+    assert ctl.k == 4
     assert type(a).__module__ == "clik._engine" and type(b) is clik.Tick
     twin = clik.Controller(run.task, gain=1000.0, constraints=constraints, q0=run.q0)
     same = [twin.step(pose.homogeneous) for _ in range(3)]  # all on the fast path

@@ -250,19 +250,48 @@ void make_ticker(PyTicker* self, nb::object owner, WrittenArray<double> q,
   self->seen = run.constraints ? static_cast<long>(run.constraints->events().size()) : 0;
 }
 
-// The fast path: a frame task's target (16, 3 or 9 doubles) and velocity (6, 3 or none);
-// None when they do not fit the task (Python then gives the error, naming the field).
-nb::object step(PyTicker& self, In<double> target, std::optional<In<double>> velocity) {
+// A float64 C-contiguous buffer (a numpy array) read in place through the buffer protocol
+// (no conversion, nothing allocated): its data and shape while it is held.
+class Doubles {
+ public:
+  // False (nothing held) unless `obj` exports C-contiguous float64 data of 1 or 2 dimensions.
+  bool take(nb::handle obj) {
+    if (PyObject_GetBuffer(obj.ptr(), &view_, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) {
+      PyErr_Clear();
+      return false;
+    }
+    held_ = true;
+    const char* f = view_.format;
+    const bool d = f != nullptr && (f[0] == 'd' || ((f[0] == '<' || f[0] == '=' || f[0] == '@') &&
+                                                     f[1] == 'd')) &&
+                   (f[0] == 'd' ? f[1] == 0 : f[2] == 0);
+    return d && view_.itemsize == 8 && (view_.ndim == 1 || view_.ndim == 2);
+  }
+  ~Doubles() {
+    if (held_) PyBuffer_Release(&view_);
+  }
+  const double* data() const { return static_cast<const double*>(view_.buf); }
+  // Its size when its shape is (rows,) (cols 0) or (rows, cols), else -1.
+  long shaped(long rows, long cols) const {
+    const bool ok = cols == 0 ? view_.ndim == 1 && view_.shape[0] == rows
+                              : view_.ndim == 2 && view_.shape[0] == rows && view_.shape[1] == cols;
+    return ok ? rows * (cols == 0 ? 1 : cols) : -1;
+  }
+
+ private:
+  Py_buffer view_{};
+  bool held_ = false;
+};
+
+// The fast path's sample: a frame task's target (16, 3 or 9 doubles) and velocity (6, 3 or
+// 0 doubles); None when they do not fit the task (nothing run).
+nb::object step(PyTicker& self, const double* target, long n, const double* velocity, long vn) {
   PyTrackingRun& run = *self.run;
   self.check_model();
   if (run.run->goals().count() != 0) {  // no std::string built on the fast path
-    throw std::invalid_argument("Ticker.step: one task (step_arrays for several)");
+    throw std::invalid_argument("Ticker.serve: one task (step_arrays for several)");
   }
-  const long vn = velocity ? static_cast<long>(velocity->size()) : 0;
-  if (!self.input.set(target.data(), static_cast<long>(target.size()),
-                      velocity ? velocity->data() : nullptr, vn)) {
-    return nb::none();
-  }
+  if (!self.input.set(target, n, velocity, vn)) return nb::none();
   const auto start = std::chrono::steady_clock::now();
   const long k = run.next;
   auto q = self.joints();
@@ -272,22 +301,26 @@ nb::object step(PyTicker& self, In<double> target, std::optional<In<double>> vel
 }
 
 // Controller.step itself (the instance's, set by Controller.reset): a one-task target as
-// a float64 C-contiguous array goes straight to the engine; anything else (a pin.SE3, a
-// list, moved obstacles, a shape the task does not take) to the controller's general step,
-// which checks it and names what is wrong. A verdict other than ok gets its reason there.
+// a float64 C-contiguous array (4x4, (3,) or (3, 3); its velocity (6,), (3,) or None) goes
+// straight to the engine; anything else (a pin.SE3, a list, moved obstacles, a shape the
+// task does not take) to the controller's general step, which checks it and names what is
+// wrong. A verdict other than ok gets its reason there.
 nb::object serve(PyTicker& self, nb::handle targets, nb::handle velocities, nb::handle obstacles) {
   const auto general = [&]() {
     return self.controller().attr("_general_step")(targets, velocities, obstacles);
   };
-  In<double> target;
-  if (!obstacles.is_none() || !nb::try_cast(targets, target, false)) return general();
-  std::optional<In<double>> velocity;
+  if (!obstacles.is_none()) return general();
+  Doubles target, velocity;
+  if (!target.take(targets)) return general();
+  const long n = std::max({target.shaped(4, 4), target.shaped(3, 0), target.shaped(3, 3)});
+  long vn = 0;
   if (!velocities.is_none()) {
-    In<double> v;
-    if (!nb::try_cast(velocities, v, false)) return general();
-    velocity = v;
+    if (!velocity.take(velocities)) return general();
+    vn = std::max(velocity.shaped(6, 0), velocity.shaped(3, 0));
+    if (vn < 0) return general();
   }
-  nb::object tick = step(self, target, velocity);
+  if (n < 0) return general();
+  nb::object tick = step(self, target.data(), n, vn > 0 ? velocity.data() : nullptr, vn);
   if (tick.is_none()) return general();
   if (nb::cast<PyTick&>(tick).code != 0) self.controller().attr("_tick_verdict")(tick);
   return tick;
@@ -392,12 +425,6 @@ void bind_ticker(nb::module_& m) {
            "run: an open TrackingRun; q: the controller's joints (nq,), updated in place; qdot "
            "(nv,): each tick's joint velocity, written; name: the one task's name (the key of "
            "Tick.errors).")
-      .def("step", &step, nb::arg("target").noconvert(),
-           nb::arg("velocity").noconvert().none() = nb::none(),
-           "One tick of a one-task run: target a 4x4 pose, a position (3,) or a rotation "
-           "(3, 3) (float64, C-contiguous), velocity (6,) or (3,) or None. Returns the Tick "
-           "(its reason left to the caller when its code is not 0), or None when the target or "
-           "the velocity does not fit the task (nothing run).")
       .def("step_arrays", &step_arrays, nb::arg("P_d").noconvert().none(),
            nb::arg("R_d").noconvert().none(), nb::arg("FF").noconvert(),
            nb::arg("at_rest").noconvert(), nb::arg("goal_ref").noconvert().none() = nb::none(),
