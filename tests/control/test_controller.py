@@ -189,6 +189,9 @@ def test_the_fast_path_hands_other_targets_to_the_general_step() -> None:
     with pytest.raises(clik.errors.InputError, match="targets"):
         ctl.step(pose.homogeneous.ravel())  # 16 numbers, not a 4x4: named, nothing run
     assert ctl.k == 4
+    e = ctl.step(np.asfortranarray(pose.homogeneous))  # not C-contiguous: converted
+    f = ctl.step(pose.homogeneous.astype(np.float32))  # not float64: converted
+    assert type(e) is clik.Tick and type(f) is clik.Tick and ctl.k == 6
     assert type(a).__module__ == "clik._engine" and type(b) is clik.Tick
     twin = clik.Controller(run.task, gain=1000.0, constraints=constraints, q0=run.q0)
     same = [twin.step(pose.homogeneous) for _ in range(3)]  # all on the fast path

@@ -97,6 +97,25 @@ struct PyTick {
   double err = 0.0, err_rot = 0.0;
 };
 
+// numpy's array object: its first fields, numpy's public ABI (the PyArray_DATA,
+// PyArray_NDIM, PyArray_DIMS, PyArray_DESCR and PyArray_FLAGS accessors read them).
+struct NumpyHead {
+  PyObject_HEAD
+  char* data;
+  int nd;
+  Py_ssize_t* dimensions;
+  Py_ssize_t* strides;
+  PyObject* base;
+  PyObject* descr;
+  int flags;
+};
+constexpr int NUMPY_C_CONTIGUOUS = 0x0001;  // NPY_ARRAY_C_CONTIGUOUS
+
+// What a float64 array is, for Doubles: numpy's ndarray type and its float64 dtype.
+struct NumpyTypes {
+  nb::object ndarray, float64;
+};
+
 struct PyTicker {
   nb::object owner;  // the PyTrackingRun (kept alive)
   PyTrackingRun* run;
@@ -110,6 +129,7 @@ struct PyTicker {
   double above_since = std::numeric_limits<double>::quiet_NaN();
   Advance last;
   nb::object empty;                 // numpy.empty
+  NumpyTypes numpy;                 // numpy.ndarray and its float64 dtype
   nb::object verdicts[5];           // the verdicts' names
   nb::object no_reason, task_name;  // "" and the one task's name
   RowBlocks q_rows, qdot_rows;
@@ -243,19 +263,29 @@ void make_ticker(PyTicker* self, nb::object owner, WrittenArray<double> q,
           "Ticker: tolerance (position [m], orientation [rad]) and settling_time [s], > 0");
   new (self) PyTicker{owner, &run, &model, q, qdot, {tol_position, tol_orientation, settling_time},
                       TickInput(run.run->task())};
-  self->empty = nb::module_::import_("numpy").attr("empty");
+  const nb::module_ np = nb::module_::import_("numpy");
+  self->empty = np.attr("empty");
+  self->numpy = NumpyTypes{np.attr("ndarray"), np.attr("dtype")("float64")};
   for (int v = 0; v < 5; ++v) self->verdicts[v] = nb::str(VERDICT_NAMES[v]);
   self->no_reason = nb::str("");
   self->task_name = nb::str(name.c_str());
   self->seen = run.constraints ? static_cast<long>(run.constraints->events().size()) : 0;
 }
 
-// A float64 C-contiguous buffer (a numpy array) read in place through the buffer protocol
-// (no conversion, nothing allocated): its data and shape while it is held.
+// A float64 C-contiguous array read in place (no conversion, nothing allocated): a numpy
+// ndarray of dtype float64 from its fields; any other object through the buffer protocol.
 class Doubles {
  public:
-  // False (nothing held) unless `obj` exports C-contiguous float64 data of 1 or 2 dimensions.
-  bool take(nb::handle obj) {
+  // False unless `obj` holds C-contiguous float64 data of 1 or 2 dimensions.
+  bool take(nb::handle obj, const NumpyTypes& np) {
+    if (Py_TYPE(obj.ptr()) == reinterpret_cast<PyTypeObject*>(np.ndarray.ptr())) {
+      const auto* a = reinterpret_cast<const NumpyHead*>(obj.ptr());
+      if (a->descr != np.float64.ptr() || !(a->flags & NUMPY_C_CONTIGUOUS)) return false;
+      data_ = reinterpret_cast<const double*>(a->data);
+      ndim_ = a->nd;
+      shape_ = a->dimensions;
+      return ndim_ == 1 || ndim_ == 2;
+    }
     if (PyObject_GetBuffer(obj.ptr(), &view_, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) {
       PyErr_Clear();
       return false;
@@ -265,22 +295,32 @@ class Doubles {
     const bool d = f != nullptr && (f[0] == 'd' || ((f[0] == '<' || f[0] == '=' || f[0] == '@') &&
                                                      f[1] == 'd')) &&
                    (f[0] == 'd' ? f[1] == 0 : f[2] == 0);
-    return d && view_.itemsize == 8 && (view_.ndim == 1 || view_.ndim == 2);
+    data_ = static_cast<const double*>(view_.buf);
+    ndim_ = view_.ndim;
+    shape_ = view_.shape;
+    return d && view_.itemsize == 8 && (ndim_ == 1 || ndim_ == 2);
   }
   ~Doubles() {
     if (held_) PyBuffer_Release(&view_);
   }
-  const double* data() const { return static_cast<const double*>(view_.buf); }
+  Doubles() = default;
+  Doubles(const Doubles&) = delete;
+  Doubles& operator=(const Doubles&) = delete;
+
+  const double* data() const { return data_; }
   // Its size when its shape is (rows,) (cols 0) or (rows, cols), else -1.
   long shaped(long rows, long cols) const {
-    const bool ok = cols == 0 ? view_.ndim == 1 && view_.shape[0] == rows
-                              : view_.ndim == 2 && view_.shape[0] == rows && view_.shape[1] == cols;
+    const bool ok = cols == 0 ? ndim_ == 1 && shape_[0] == rows
+                              : ndim_ == 2 && shape_[0] == rows && shape_[1] == cols;
     return ok ? rows * (cols == 0 ? 1 : cols) : -1;
   }
 
  private:
   Py_buffer view_{};
   bool held_ = false;
+  const double* data_ = nullptr;
+  int ndim_ = 0;
+  const Py_ssize_t* shape_ = nullptr;
 };
 
 // The fast path's sample: a frame task's target (16, 3 or 9 doubles) and velocity (6, 3 or
@@ -311,11 +351,11 @@ nb::object serve(PyTicker& self, nb::handle targets, nb::handle velocities, nb::
   };
   if (!obstacles.is_none()) return general();
   Doubles target, velocity;
-  if (!target.take(targets)) return general();
+  if (!target.take(targets, self.numpy)) return general();
   const long n = std::max({target.shaped(4, 4), target.shaped(3, 0), target.shaped(3, 3)});
   long vn = 0;
   if (!velocities.is_none()) {
-    if (!velocity.take(velocities)) return general();
+    if (!velocity.take(velocities, self.numpy)) return general();
     vn = std::max(velocity.shaped(6, 0), velocity.shaped(3, 0));
     if (vn < 0) return general();
   }
