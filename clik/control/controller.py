@@ -14,6 +14,7 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping, Sequence
 from typing import Any
+from weakref import WeakMethod
 
 import numpy as np
 
@@ -144,7 +145,7 @@ class Controller:
             # the fast path: step() is the engine's own call, which hands anything but a
             # one-task float64 target to _general_step (the method below)
             ticker = self._ticks.ticker
-            ticker.serving(self)
+            ticker.serving(WeakMethod(self._general_step), WeakMethod(self._tick_verdict))
             self.step = ticker.serve  # type: ignore[method-assign]
         self._worst: tuple[str, str] = ("ok", "")
         self._wall = 0.0

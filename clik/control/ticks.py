@@ -136,7 +136,8 @@ class CompiledTicks(PythonTicks):
         Tick.register(engine.Tick)  # the fast path's ticks are Ticks
         self.ticker = engine.Ticker(
             self.native, self.q, self.qdot_buffer, tol.position, tol.orientation,
-            tol.settling_time,
+            tol.settling_time, name="task", empty=np.empty, ndarray=np.ndarray,
+            float64=np.dtype(np.float64),
         )  # fmt: skip
 
     @property

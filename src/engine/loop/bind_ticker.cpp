@@ -22,6 +22,7 @@
 #include <nanobind/stl/string.h>
 
 #include "boundary.hpp"
+#include "loop/py_tick.hpp"
 #include "loop/py_tracking_run.hpp"
 #include "loop/tick_input.hpp"
 #include "model/model_bridge.hpp"
@@ -40,81 +41,6 @@ struct TickTolerance {
 };
 
 constexpr const char* VERDICT_NAMES[] = {"ok", "deadlock", "violated", "diverged", "off_track"};
-
-// A row of a block of rows (RowBlocks): its numpy view made when first asked.
-struct LazyRow {
-  nb::object block;
-  long row = 0;
-  nb::object view;
-
-  nb::object get() {
-    if (!view.is_valid()) {
-      PyObject* v = PySequence_GetItem(block.ptr(), row);
-      if (v == nullptr) throw nb::python_error();
-      view = nb::steal(v);
-    }
-    return view;
-  }
-};
-
-// Rows handed out one per tick: a (BLOCK, n) float64 array, a new one when used up (a
-// tick's row keeps its block alive; a block no tick holds is freed). A row is written
-// once: each tick's q is its own array, nothing copied when it is read.
-class RowBlocks {
- public:
-  static constexpr long BLOCK = 256;
-
-  LazyRow next(const double* values, long n, const nb::object& empty) {
-    if (row_ == BLOCK) {
-      block_ = empty(nb::make_tuple(BLOCK, n));
-      data_ = nb::cast<WrittenArray<double>>(block_).data();
-      row_ = 0;
-    }
-    std::memcpy(data_ + row_ * n, values, static_cast<std::size_t>(n) * sizeof(double));
-    return LazyRow{block_, row_++, nb::object()};
-  }
-
- private:
-  nb::object block_;
-  double* data_ = nullptr;
-  long row_ = BLOCK;
-};
-
-// One tick as the fast path returns it (`_engine.Tick`: clik.control.tick.Tick's
-// attributes). Its lists and arrays are made when first read (then kept).
-struct PyTick {
-  LazyRow q, qdot;
-  double t = 0.0;
-  long k = 0;
-  int code = 0;
-  nb::object verdict, reason;
-  nb::object ticker;             // the PyTicker: the names and the run's events
-  long ev0 = 0, ev1 = 0;         // this tick's events: the run's [ev0, ev1)
-  int n_active = 0;              // the active rows' keys: keys, then more_keys
-  std::array<int, 8> keys{};
-  std::vector<int> more_keys;
-  nb::object events, active;     // made when first read
-  double err = 0.0, err_rot = 0.0;
-};
-
-// numpy's array object: its first fields, numpy's public ABI (the PyArray_DATA,
-// PyArray_NDIM, PyArray_DIMS, PyArray_DESCR and PyArray_FLAGS accessors read them).
-struct NumpyHead {
-  PyObject_HEAD
-  char* data;
-  int nd;
-  Py_ssize_t* dimensions;
-  Py_ssize_t* strides;
-  PyObject* base;
-  PyObject* descr;
-  int flags;
-};
-constexpr int NUMPY_C_CONTIGUOUS = 0x0001;  // NPY_ARRAY_C_CONTIGUOUS
-
-// What a float64 array is, for Doubles: numpy's ndarray type and its float64 dtype.
-struct NumpyTypes {
-  nb::object ndarray, float64;
-};
 
 struct PyTicker {
   nb::object owner;  // the PyTrackingRun (kept alive)
@@ -136,7 +62,7 @@ struct PyTicker {
   long seen = 0;                       // events already given in a tick
   std::vector<nb::object> key_names;  // the constraints' names, by key (built when asked)
   PyObject* self_py = nullptr;        // this ticker's Python object (borrowed)
-  nb::object controller_ref;          // a weakref to the controller served (serve)
+  nb::object general_ref, verdict_ref;  // the controller's methods (WeakMethods; serving)
 
   // The verdict of the sample just run at time tk (the worst that holds).
   int judge(double tk) {
@@ -240,17 +166,18 @@ struct PyTicker {
     return nb::cast(std::move(out));
   }
 
-  // The controller this ticker serves (held weakly: it holds the ticker).
-  nb::handle controller() const {
-    PyObject* c = controller_ref.is_valid() ? PyWeakref_GetObject(controller_ref.ptr()) : nullptr;
-    if (c == nullptr || c == Py_None) throw std::invalid_argument("Ticker: its controller is gone");
-    return c;
+  // One of the served controller's methods (weakly held: the controller holds the ticker).
+  static nb::object method(const nb::object& weak) {
+    nb::object m = weak.is_valid() ? weak() : nb::none();
+    if (m.is_none()) throw std::invalid_argument("Ticker: its controller is gone (serving)");
+    return m;
   }
 };
 
 void make_ticker(PyTicker* self, nb::object owner, WrittenArray<double> q,
                  WrittenArray<double> qdot, double tol_position, double tol_orientation,
-                 double settling_time, const std::string& name) {
+                 double settling_time, const std::string& name, nb::object empty,
+                 nb::object ndarray, nb::object float64) {
   PyTrackingRun& run = nb::cast<PyTrackingRun&>(owner);
   require(run.run->is_open(), "Ticker: an open TrackingRun (t None)");
   require(q.ndim() == 1 && static_cast<long>(q.shape(0)) == run.record.nq() &&
@@ -263,65 +190,13 @@ void make_ticker(PyTicker* self, nb::object owner, WrittenArray<double> q,
           "Ticker: tolerance (position [m], orientation [rad]) and settling_time [s], > 0");
   new (self) PyTicker{owner, &run, &model, q, qdot, {tol_position, tol_orientation, settling_time},
                       TickInput(run.run->task())};
-  const nb::module_ np = nb::module_::import_("numpy");
-  self->empty = np.attr("empty");
-  self->numpy = NumpyTypes{np.attr("ndarray"), np.attr("dtype")("float64")};
+  self->empty = std::move(empty);
+  self->numpy = NumpyTypes{std::move(ndarray), std::move(float64)};
   for (int v = 0; v < 5; ++v) self->verdicts[v] = nb::str(VERDICT_NAMES[v]);
   self->no_reason = nb::str("");
   self->task_name = nb::str(name.c_str());
   self->seen = run.constraints ? static_cast<long>(run.constraints->events().size()) : 0;
 }
-
-// A float64 C-contiguous array read in place (no conversion, nothing allocated): a numpy
-// ndarray of dtype float64 from its fields; any other object through the buffer protocol.
-class Doubles {
- public:
-  // False unless `obj` holds C-contiguous float64 data of 1 or 2 dimensions.
-  bool take(nb::handle obj, const NumpyTypes& np) {
-    if (Py_TYPE(obj.ptr()) == reinterpret_cast<PyTypeObject*>(np.ndarray.ptr())) {
-      const auto* a = reinterpret_cast<const NumpyHead*>(obj.ptr());
-      if (a->descr != np.float64.ptr() || !(a->flags & NUMPY_C_CONTIGUOUS)) return false;
-      data_ = reinterpret_cast<const double*>(a->data);
-      ndim_ = a->nd;
-      shape_ = a->dimensions;
-      return ndim_ == 1 || ndim_ == 2;
-    }
-    if (PyObject_GetBuffer(obj.ptr(), &view_, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) {
-      PyErr_Clear();
-      return false;
-    }
-    held_ = true;
-    const char* f = view_.format;
-    const bool d = f != nullptr && (f[0] == 'd' || ((f[0] == '<' || f[0] == '=' || f[0] == '@') &&
-                                                     f[1] == 'd')) &&
-                   (f[0] == 'd' ? f[1] == 0 : f[2] == 0);
-    data_ = static_cast<const double*>(view_.buf);
-    ndim_ = view_.ndim;
-    shape_ = view_.shape;
-    return d && view_.itemsize == 8 && (ndim_ == 1 || ndim_ == 2);
-  }
-  ~Doubles() {
-    if (held_) PyBuffer_Release(&view_);
-  }
-  Doubles() = default;
-  Doubles(const Doubles&) = delete;
-  Doubles& operator=(const Doubles&) = delete;
-
-  const double* data() const { return data_; }
-  // Its size when its shape is (rows,) (cols 0) or (rows, cols), else -1.
-  long shaped(long rows, long cols) const {
-    const bool ok = cols == 0 ? ndim_ == 1 && shape_[0] == rows
-                              : ndim_ == 2 && shape_[0] == rows && shape_[1] == cols;
-    return ok ? rows * (cols == 0 ? 1 : cols) : -1;
-  }
-
- private:
-  Py_buffer view_{};
-  bool held_ = false;
-  const double* data_ = nullptr;
-  int ndim_ = 0;
-  const Py_ssize_t* shape_ = nullptr;
-};
 
 // The fast path's sample: a frame task's target (16, 3 or 9 doubles) and velocity (6, 3 or
 // 0 doubles); None when they do not fit the task (nothing run).
@@ -347,7 +222,7 @@ nb::object step(PyTicker& self, const double* target, long n, const double* velo
 // wrong. A verdict other than ok gets its reason there.
 nb::object serve(PyTicker& self, nb::handle targets, nb::handle velocities, nb::handle obstacles) {
   const auto general = [&]() {
-    return self.controller().attr("_general_step")(targets, velocities, obstacles);
+    return PyTicker::method(self.general_ref)(targets, velocities, obstacles);
   };
   if (!obstacles.is_none()) return general();
   Doubles target, velocity;
@@ -362,7 +237,7 @@ nb::object serve(PyTicker& self, nb::handle targets, nb::handle velocities, nb::
   if (n < 0) return general();
   nb::object tick = step(self, target.data(), n, vn > 0 ? velocity.data() : nullptr, vn);
   if (tick.is_none()) return general();
-  if (nb::cast<PyTick&>(tick).code != 0) self.controller().attr("_tick_verdict")(tick);
+  if (nb::cast<PyTick&>(tick).code != 0) PyTicker::method(self.verdict_ref)(tick);
   return tick;
 }
 
@@ -461,10 +336,12 @@ void bind_ticker(nb::module_& m) {
       .def("__init__", &make_ticker, nb::arg("run"), nb::arg("q").noconvert(),
            nb::arg("qdot").noconvert(),
            nb::arg("tol_position"), nb::arg("tol_orientation"), nb::arg("settling_time"),
-           nb::arg("name") = "task",
+           nb::arg("name"), nb::arg("empty"), nb::arg("ndarray"), nb::arg("float64"),
            "run: an open TrackingRun; q: the controller's joints (nq,), updated in place; qdot "
            "(nv,): each tick's joint velocity, written; name: the one task's name (the key of "
-           "Tick.errors).")
+           "Tick.errors); empty, ndarray, float64: numpy.empty, numpy.ndarray and "
+           "numpy.dtype('float64') (the ticks' rows are made with the first; a target of the "
+           "other two is read from its fields).")
       .def("step_arrays", &step_arrays, nb::arg("P_d").noconvert().none(),
            nb::arg("R_d").noconvert().none(), nb::arg("FF").noconvert(),
            nb::arg("at_rest").noconvert(), nb::arg("goal_ref").noconvert().none() = nb::none(),
@@ -485,8 +362,13 @@ void bind_ticker(nb::module_& m) {
            "controller's _general_step.")
       .def(
           "serving",
-          [](PyTicker& s, nb::handle controller) { s.controller_ref = nb::weakref(controller); },
-          nb::arg("controller"), "The controller whose steps serve() takes (held weakly).")
+          [](PyTicker& s, nb::object general, nb::object verdict) {
+            s.general_ref = std::move(general);
+            s.verdict_ref = std::move(verdict);
+          },
+          nb::arg("general"), nb::arg("verdict"),
+          "The served controller's methods, as weakref.WeakMethod: general(targets, velocities, "
+          "obstacles) takes what serve() does not; verdict(tick) gives a tick's reason.")
       .def_prop_ro("wall", [](const PyTicker& s) { return s.wall; },
                    "Time spent in the ticks so far [s].")
       .def_prop_ro("above_since", [](const PyTicker& s) { return s.above_since; },
