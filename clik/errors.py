@@ -30,6 +30,23 @@ def shown(value: object, limit: int = SHOWN_CHARACTERS) -> str:
     return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
 
 
+def shown_path(path: str, limit: int = SHOWN_CHARACTERS) -> str:
+    """A file path or URI as messages show it: whole, quoted, unless longer than ``limit``.
+
+    A longer one is cut in its middle: its first characters and its last component (the
+    file name, itself cut in its middle past ``limit // 2``) are kept, and its length given,
+    so the file can still be found.
+    """
+    if len(path) <= limit:
+        return repr(path)
+    name = path.rpartition("/")[2]
+    half = limit // 2
+    if len(name) > half:
+        name = f"{name[: half // 2]}...{name[-(half - half // 2) :]}"
+    head = path[: max(limit - len(name), 0)]
+    return f"{head + '...' + name!r} ({len(path)} characters)"
+
+
 def _listing(names: Iterable[str], limit: int = 40) -> str:
     """Comma-separated list of names, shortened past ``limit`` entries."""
     names = list(names)

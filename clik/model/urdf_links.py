@@ -19,6 +19,7 @@ from pathlib import Path
 
 from lxml import etree
 
+from clik.errors import shown_path
 from clik.model.mesh_check import (
     MeshRefused,
     check_mesh_file,
@@ -80,7 +81,7 @@ def _check_mesh(
     file, root = _mesh_location(filename, mesh, urdf, package_dirs, fail)
     try:
         check_scale(scale, what)
-        facts = check_mesh_file(file, scale, root, what=f"{what} {shown(filename)}: file")
+        facts = check_mesh_file(file, scale, root, what=f"{what} {shown_path(filename)}: file")
         for side in facts.side_files:  # an OBJ's material files: inside the folder too
             _check_side_file(facts.path.parent / side, root)
     except MeshRefused as refused:
@@ -110,16 +111,18 @@ def _mesh_location(
         package, _, rest = filename.removeprefix("package://").lstrip("/").partition("/")
         inside = posixpath.normpath(rest or ".")
         if not package or package in (".", "..") or inside.startswith(("..", "/")):
-            raise fail(f"mesh {shown(filename)} leaves its package folder", mesh)
+            raise fail(f"mesh {shown_path(filename)} leaves its package folder", mesh)
         for folder in package_dirs:  # the first folder holding it, as Pinocchio looks
             candidate = Path(folder) / package / inside
             if os.path.lexists(candidate):
                 return candidate, Path(folder) / package
         searched = ", ".join(map(str, package_dirs)) or "none given"
-        raise fail(f"mesh file {shown(filename)} not found (package folders: {searched})", mesh)
+        raise fail(
+            f"mesh file {shown_path(filename)} not found (package folders: {searched})", mesh
+        )
     if "://" in filename and not filename.startswith("file://"):
-        raise fail(f"mesh {shown(filename)} uses an unsupported URI scheme", mesh)
+        raise fail(f"mesh {shown_path(filename)} uses an unsupported URI scheme", mesh)
     file = urdf.parent / filename.removeprefix("file://")
     if not os.path.lexists(file):
-        raise fail(f"mesh file {shown(filename)} not found (looked for {file})", mesh)
+        raise fail(f"mesh file {shown_path(filename)} not found (looked for {file})", mesh)
     return file, Path(os.path.normpath(file.absolute().parent))

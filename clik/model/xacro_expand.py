@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import re
 import threading
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
@@ -39,7 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from clik.errors import ClikError, InputError, RobotLoadError
+from clik.errors import SHOWN_CHARACTERS, ClikError, InputError, RobotLoadError
 from clik.model.urdf_check import parse_xml
 
 XACRO_SUFFIX = ".xacro"
@@ -164,8 +165,11 @@ class _Scope:
     file: Path
     package_dirs: list[Path]
     roots: list[Path] = field(default_factory=list)
+    read: list[Path] = field(default_factory=list)
+    """The files xacro opened so far (the file itself first)."""
 
     def __post_init__(self) -> None:
+        self.read.append(self.file)
         self._add_root(self.file.parent)
         for folder in self.package_dirs:  # the package holding the file, if any
             base = folder.resolve()
@@ -214,6 +218,8 @@ class _Scope:
                 f"folders a xacro file may read from ({roots}): its own folder, its "
                 "package and the packages found by $(find)",
             )
+        if resolved not in self.read:
+            self.read.append(resolved)
         return resolved
 
 
@@ -289,19 +295,57 @@ def _clik_error(
     """The clik error for an exception raised while xacro expanded ``scope.file``."""
     from xacro.substitution_args import ArgException
 
+    declared = _declared_args(scope.read)
+    unknown = sorted(set(given) - given.asked - set(declared))
+    if unknown:  # a misspelt argument: said, not the failure it causes further on
+        known = ", ".join(repr(a) for a in sorted(given.asked | set(declared))) or "none"
+        return InputError(
+            "xacro_args",
+            f"arguments that {scope.file} declares or uses ({known}); the expansion then "
+            f"failed: {' '.join(str(error).split())[:SHOWN_CHARACTERS]}",
+            got={k: given[k] for k in unknown},
+        )
     for cause in _causes(error):
         if isinstance(cause, ClikError):
             return cause
         is_key = isinstance(cause, KeyError) and cause.args and cause.args[0] in given.missing
         if isinstance(cause, ArgException) or is_key:
             name = str(cause.args[0])
-            return InputError(
-                "xacro_args",
-                f"a value for the xacro argument {name!r}: {scope.file} uses it and "
-                f'declares no default (<xacro:arg name="{name}" default="..."/>)',
-                got=dict(given),
-            )
+            return InputError("xacro_args", _missing_arg(name, scope.file, declared), dict(given))
     message = " ".join(str(error).split()) or type(error).__name__
     where = [f for f in files if f and Path(f).resolve() != scope.file]
     inside = f" (in {where[-1]}, included from {scope.file})" if where else ""
     return RobotLoadError(scope.file, f"xacro cannot expand it{inside}: {message}")
+
+
+_ARG = re.compile(r"""<xacro:arg\s[^>]*?name\s*=\s*["']([^"']+)["']([^>]*)>""")
+"""An ``<xacro:arg name=...>`` declaration (its attributes after the name: a default?)."""
+
+
+def _declared_args(files: list[Path]) -> dict[str, tuple[Path, int, bool]]:
+    """Each ``<xacro:arg>`` the files declare: its file, line and whether it has a default."""
+    out: dict[str, tuple[Path, int, bool]] = {}
+    for file in files:
+        try:
+            text = file.read_text(encoding="utf-8", errors="replace")
+        except OSError:
+            continue
+        for match in _ARG.finditer(text):
+            line = text.count("\n", 0, match.start()) + 1
+            out.setdefault(match.group(1), (file, line, "default" in match.group(0)))
+    return out
+
+
+def _missing_arg(name: str, file: Path, declared: dict[str, tuple[Path, int, bool]]) -> str:
+    """What a missing xacro argument needs: a value, or its declaration moved up."""
+    where = declared.get(name)
+    if where is not None and where[2]:
+        return (
+            f"a value for the xacro argument {name!r}, or its declaration moved up: {file} "
+            f"uses it before {where[0]}, line {where[1]} declares it with a default (xacro "
+            "reads a file in order)"
+        )
+    return (
+        f"a value for the xacro argument {name!r}: {file} uses it and declares no default "
+        f'(<xacro:arg name="{name}" default="..."/>)'
+    )

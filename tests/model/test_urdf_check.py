@@ -110,6 +110,18 @@ def test_missing_mesh_file_is_named(tmp_path):
     assert error.line == 3
 
 
+def test_a_missing_mesh_is_named_by_its_whole_path(tmp_path):
+    """A long mesh path is shown whole (the file can be found from the message); a path past
+    the shown length keeps its start and its file name, and gives its length."""
+    fr3 = "package://franka_description/meshes/robot_arms/fr3/visual/link0.dae"  # 67 chars
+    error = problem(write(tmp_path, mesh_robot(fr3)), package_dirs=[tmp_path])
+    assert f"mesh file {fr3!r} not found" in error.problem
+    deep = "package://pkg/" + "folder/" * 60 + "link0_visual.dae"
+    error = problem(write(tmp_path, mesh_robot(deep)), package_dirs=[tmp_path])
+    assert "'package://pkg/folder/folder/" in error.problem
+    assert f"...link0_visual.dae' ({len(deep)} characters) not found" in error.problem
+
+
 def test_relative_and_package_meshes_that_exist_pass(tmp_path):
     (tmp_path / "pkg" / "meshes").mkdir(parents=True)
     (tmp_path / "pkg" / "meshes" / "l1.stl").write_text("solid l1\nendsolid l1\n")

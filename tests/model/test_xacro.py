@@ -204,6 +204,32 @@ def test_missing_argument_names_it_and_xacro_args(tmp_path):
     assert "declares no default" in str(caught.value)
 
 
+def test_an_argument_used_before_its_declaration_is_said_so(tmp_path):
+    body = (
+        '<link name="c"><inertial><mass value="$(arg mass)"/></inertial></link>\n'
+        '<xacro:arg name="mass" default="1.0"/>'
+    )
+    with pytest.raises(InputError) as caught:
+        Robot.load(xacro_file(tmp_path, body))
+    message = str(caught.value)
+    assert "or its declaration moved up" in message and "declares no default" not in message
+    assert "line 4 declares it with a default" in message  # the <xacro:arg> line
+
+
+def test_a_misspelt_argument_is_named_when_the_expansion_fails(tmp_path):
+    """A misspelt name leaves the real argument without a value: the misspelling is the
+    error, not the failure it causes further on."""
+    body = (
+        '<xacro:arg name="mass"/>\n'
+        '<link name="c"><inertial><mass value="$(arg mass)"/></inertial></link>'
+    )
+    with pytest.raises(InputError) as caught:
+        Robot.load(xacro_file(tmp_path, body), xacro_args={"mas": "2.0"})
+    message = str(caught.value)
+    assert caught.value.field == "xacro_args" and "{'mas': '2.0'}" in message
+    assert "declares or uses ('mass')" in message and "the expansion then failed" in message
+
+
 def test_unknown_argument_is_refused(tmp_path):
     with pytest.raises(InputError, match=r"xacro_args: expected arguments that .* \('link_length'"):
         Robot.load(ARM_XACRO, xacro_args={"n_link": "5"})
