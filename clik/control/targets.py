@@ -87,15 +87,15 @@ def one_sample(task: Any, target: Any, velocity: Any, tk: float, name: str) -> A
         pose = isinstance(target, pin.SE3) or given.shape == (4, 4)
         p = _pose(task, target, field)[0] if pose else given
         v, _ = _velocity(task, velocity, vfield)
-        return _reference(t, p, v, None, None, field)
+        return _reference(t, p, v, None, None, field, vfield)
     p, R = _pose(task, target, field)
     v, w = _velocity(task, velocity, vfield)
-    return _reference(t, p, v, R, w if R is not None else None, field)
+    return _reference(t, p, v, R, w if R is not None else None, field, vfield)
 
 
 def _reference(
     t: np.ndarray, p: np.ndarray | None, v: np.ndarray, R: np.ndarray | None,
-    w: np.ndarray | None, field: str,
+    w: np.ndarray | None, field: str, vfield: str,
 ) -> Reference:  # fmt: skip
     if p is not None and p.shape != (3,):
         raise InputError(field, "a position (3,) [m]", f"shape {p.shape}")
@@ -103,8 +103,9 @@ def _reference(
         pos = {} if p is None else {"position": p[None], "linear_velocity": v[None]}
         rot = {} if R is None or w is None else {"rotation": R[None], "angular_velocity": w[None]}
         return Reference(t, **pos, **rot)
-    except InputError as exc:
-        raise InputError(field, exc.expected, exc.got) from None
+    except InputError as exc:  # named by what the caller gave: the target or its velocity
+        velocity = "velocity" in f"{exc.field} {exc.got}"
+        raise InputError(vfield if velocity else field, exc.expected, exc.got) from None
 
 
 def by_name(value: Any, names: list[str], field: str) -> dict[str, Any]:

@@ -237,6 +237,8 @@ def test_bad_targets_are_refused_by_name(engine: str) -> None:
         ctl.step([np.nan, 0.0, 0.0])
     with pytest.raises(clik.InputError, match=r"velocities\['task'\]"):
         ctl.step([0.5, 0.5, 0.0], velocity_bad := np.zeros(7))  # noqa: F841
+    with pytest.raises(clik.InputError, match=r"velocities\['task'\]: expected finite"):
+        ctl.step(np.array([0.5, 0.5, 0.0]), np.array([np.nan, 0.0, 0.0]))  # the velocity named
     with pytest.raises(clik.InputError, match="targets"):
         ctl.step({"hand": [0.5, 0.5, 0.0]})
     with pytest.raises(clik.InputError, match="record_size"):
