@@ -41,6 +41,8 @@ from clik.loop.tracker import ReachWarning, StabilityWarning, Tracker, track
 from clik.model.loading import ReferenceClippedWarning
 from clik.model.mimic import MimicJointWarning
 from clik.model.robot import Robot
+from clik.model.srdf import SrdfWarning
+from clik.model.visual_meshes import MissingVisualMeshWarning
 from clik.objectives.objective import Objective
 from clik.outputs.result import TrackingResult
 from clik.solving.solve_mode import solve
@@ -67,6 +69,7 @@ __all__ = [
     "JointNotFound",
     "JointSpeed",
     "MimicJointWarning",
+    "MissingVisualMeshWarning",
     "Objective",
     "OutputError",
     "OutputExistsError",
@@ -81,6 +84,7 @@ __all__ = [
     "SolveResult",
     "SpeedLimitWarning",
     "SpeedLimits",
+    "SrdfWarning",
     "StabilityWarning",
     "Task",
     "Tick",

@@ -9,6 +9,7 @@ The command line maps each family to an exit code (see :data:`EXIT_CODES`).
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -45,6 +46,23 @@ def shown_path(path: str, limit: int = SHOWN_CHARACTERS) -> str:
         name = f"{name[: half // 2]}...{name[-(half - half // 2) :]}"
     head = path[: max(limit - len(name), 0)]
     return f"{head + '...' + name!r} ({len(path)} characters)"
+
+
+def user_stacklevel() -> int:
+    """The ``stacklevel`` of ``warnings.warn`` that points at the first caller outside clik.
+
+    Call it in the function that calls ``warnings.warn`` (``stacklevel=user_stacklevel()``):
+    the warning then names the user's line (the ``Robot.load(...)`` call), however deep in
+    clik it was raised.
+    """
+    level, frame = 2, sys._getframe(2)  # 1: the function warning; 2: its caller
+    while frame.f_back is not None and _in_clik(frame.f_globals.get("__name__", "")):
+        level, frame = level + 1, frame.f_back
+    return level
+
+
+def _in_clik(module: str) -> bool:
+    return module == "clik" or module.startswith("clik.")
 
 
 def _listing(names: Iterable[str], limit: int = 40) -> str:

@@ -2,7 +2,8 @@
 
 The case study (:mod:`clik.demo`), the live 3-D view (:mod:`clik.viz`), the
 benchmark suite (:mod:`clik.bench`) and the robots known by name
-(:class:`~clik.model.robot.Robot`); these commands only read their flags.
+(:class:`~clik.model.robot.Robot`) or found in a ROS workspace
+(:mod:`clik.model.descriptions`); these commands only read their flags.
 """
 
 from __future__ import annotations
@@ -42,11 +43,38 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_robots(args: argparse.Namespace) -> int:
-    """``clik robots``: the robots known by name, and where each is found."""
+    """``clik robots``: the robots known by name; with ``--path WS``, those in a workspace."""
+    if args.path is not None:
+        return _workspace_robots(Path(args.path))
     from clik.model.robot import Robot
 
     for name, where in Robot.available().items():
         print(f"{name:32s} {where}")
+    return 0
+
+
+def _workspace_robots(folder: Path) -> int:
+    """``clik robots --path WS``: each robot description in the workspace, and how to load it.
+
+    Exit code 0 when some are found, 1 when none (said in words).
+    """
+    from clik.model.descriptions import robot_descriptions
+
+    found, skipped = robot_descriptions(folder)  # InputError: not a folder, budgets
+    for bad in skipped:
+        print(f"skipped {bad.path}: {bad.problem}")
+    if not found:
+        print(
+            f"no robot description (a *.urdf or *.xacro file with a <robot> root, inside a "
+            f"ROS package: a folder with a package.xml) found under {folder}"
+        )
+        return 1
+    width = max(len("package"), *(len(item.package) for item in found))
+    print(f"{'package':{width}s} file")
+    for item in found:
+        print(f"{item.package:{width}s} {item.path}")
+    print(f"\nload one with Robot.load(path, package_dirs=[{str(folder)!r}])")
+    print(f'or in a scenario: [robot] source = "path", package_dirs = ["{folder}"]')
     return 0
 
 
@@ -75,7 +103,12 @@ def add_show(sub: Any) -> None:
 
 def add_robots(sub: Any) -> None:
     """The ``clik robots`` subcommand."""
-    r = sub.add_parser("robots", help="list the robots known by name")
+    r = sub.add_parser("robots", help="list the robots known by name, or in a ROS workspace")
+    r.add_argument(
+        "--path",
+        metavar="WS",
+        help="list the robot descriptions (URDF, xacro) in the ROS packages under this folder",
+    )
     r.set_defaults(func=cmd_robots)
 
 

@@ -64,8 +64,9 @@ class CollisionScene:
         obstacles: The obstacles.
         links: Optional subset of link (frame) names to check; default all links with
             collision geometry.
-        self_collision: Also create link-link pairs (adjacent links and pairs closer
-            than ``self_margin`` at the reference configuration are excluded).
+        self_collision: Also create link-link pairs (adjacent links, pairs closer
+            than ``self_margin`` at the reference configuration and the robot's SRDF
+            disabled pairs, ``robot.disabled_collision_pairs``, are excluded).
 
     Attributes:
         gmodel: Pinocchio geometry model (links first, then obstacles); only read after
@@ -74,6 +75,9 @@ class CollisionScene:
         link_joint: Parent joint index of each link geometry.
         obstacle_pairs: Pair index of (link geometry i, obstacle o), array (n_links, n_obs).
         self_pairs: (pair index, link geometry a, link geometry b) of each link pair.
+        srdf_skipped_pairs: How many link geometry pairs the other rules keep were left
+            out because the robot's SRDF disables their links' collisions (0 without
+            self-collision).
         link_labels: Name of each link geometry in constraint names.
 
     The sequences are read-only (:class:`~clik.constraints.read_only.ReadOnlyList`), the
@@ -108,6 +112,7 @@ class CollisionScene:
             )
         self._bounding_spheres()
         self._add_obstacles(gmodel, obstacles)
+        self.srdf_skipped_pairs = 0
         self_pairs = self._self_pairs(gmodel, robot, self_margin) if self_collision else []
         self.self_pairs = ReadOnlyList(self_pairs, "scene.self_pairs", _CHANGE_SCENE)
         self.gmodel = gmodel
@@ -170,15 +175,15 @@ class CollisionScene:
         self.link_joint = np.asarray(link_joint, dtype=np.intp)
 
     def _warn_links_without_geometry(self) -> None:
-        """Bodies drawn (visual geometry) with no collision geometry at all: reported once."""
-        frame_names = [f.name for f in self.model.frames]
+        """Bodies drawn (visual geometry) with no collision geometry at all: reported once.
+
+        The drawn links are the URDF's links with ``<visual>`` elements
+        (``Robot.visual_links``, kept at loading): the visual model, slow to read, is
+        never built here. A robot not made by ``Robot.load`` has none listed.
+        """
         checked = {g.parentJoint for g in self.robot.collision_model.geometryObjects}
         self.links_without_geometry = sorted(
-            {
-                frame_names[g.parentFrame]
-                for g in self.robot.visual_model.geometryObjects
-                if g.parentJoint > 0 and g.parentJoint not in checked
-            }
+            link for link, joint in _drawn_links(self.robot) if joint > 0 and joint not in checked
         )
         if self.links_without_geometry:
             warnings.warn(
@@ -216,7 +221,12 @@ class CollisionScene:
     def _self_pairs(
         self, gmodel: pin.GeometryModel, robot: Robot, margin: float
     ) -> list[tuple[int, int, int]]:
-        """Link-link pairs, excluding adjacent links and pairs in contact at the reference."""
+        """Link-link pairs, but adjacent links, pairs in contact at the reference, SRDF pairs.
+
+        The robot's SRDF pairs (``robot.disabled_collision_pairs``) that the other rules
+        keep are counted in :attr:`srdf_skipped_pairs`.
+        """
+        disabled = robot.disabled_collision_pairs
         model = self.model
         parents = model.parents
         data = model.createData()
@@ -239,6 +249,10 @@ class CollisionScene:
                     res,
                 )
                 if dist <= margin:
+                    continue
+                names = sorted((self.link_names[a], self.link_names[b]))
+                if (names[0], names[1]) in disabled:
+                    self.srdf_skipped_pairs += 1
                     continue
                 pairs.append((len(gmodel.collisionPairs), a, b))
                 gmodel.addCollisionPair(pin.CollisionPair(a, b))
@@ -412,6 +426,17 @@ class SceneRun:
         res = pin.computeDistance(self.gmodel, self.gdata, pair)
         self.gdata.distanceRequests[pair].updateGuess(res)
         return res.min_distance, res.getNearestPoint1(), res.getNearestPoint2(), res.normal
+
+
+def _drawn_links(robot: Robot) -> list[tuple[str, int]]:
+    """(link name, parent joint index) of each link with visual geometry in the model."""
+    model = robot.model
+    body = pin.FrameType.BODY  # a link's frame (kept where a fixed or locked joint merged it)
+    return [
+        (link, int(model.frames[model.getFrameId(link, body)].parentJoint))
+        for link in sorted(robot.visual_links or ())
+        if model.existFrame(link, body)
+    ]
 
 
 def _tf(M: pin.SE3) -> coal.Transform3s:

@@ -190,6 +190,16 @@ class ConstraintSet:
             else None
         )
 
+    @property
+    def srdf_skipped_pairs(self) -> int:
+        """Link pairs left out of the self-collision rows by the robot's SRDF.
+
+        Pairs of link geometries that are neither adjacent nor touching at the reference
+        but whose links the SRDF's ``<disable_collisions>`` name (0 without
+        ``self_collision``; see ``robot.disabled_collision_pairs``).
+        """
+        return 0 if self.scene is None else self.scene.srdf_skipped_pairs
+
     def with_margin(self, margin: float) -> ConstraintSet:
         """A new set whose rows hold ``margin`` beyond every threshold (solve mode's rows).
 

@@ -9,7 +9,9 @@ constant threshold).
 
 Only one-DOF joints with a finite range have rows: revolute joints (values in
 [rad]) and prismatic joints ([m]). A continuous joint (no limits, stored as
-(cos, sin)) and any other joint get none, while the other joints keep theirs;
+(cos, sin)), a planar or floating base (:mod:`clik.model.base`: unlimited x, y, z,
+its rotation a (cos, sin) pair or a quaternion, never a row) and any other joint get
+none, while the other joints keep theirs;
 each limited joint is mapped to its configuration index (to evaluate ``q_i``)
 and its velocity index (the nonzero entry of its rows).
 """
@@ -135,7 +137,7 @@ class JointLimits(ConstraintKind):
             if kind not in (REVOLUTE, PRISMATIC):
                 raise InputError(
                     f"constraints.joint_limits.override.{joint_name}",
-                    "a revolute or prismatic joint (a continuous joint has no range)",
+                    "a revolute or prismatic joint (a continuous joint or a base has no range)",
                     kind,
                 )
             for side, value in lim.items():

@@ -1,7 +1,8 @@
 r"""Link pairs (clik's addition): the obstacle row with a second link in the obstacle's place.
 
 For two links of the robot (not adjacent, not touching at the reference
-configuration, see :class:`~clik.constraints.collision_scene.CollisionScene`),
+configuration, not disabled by the robot's SRDF, see
+:class:`~clik.constraints.collision_scene.CollisionScene`),
 ``d`` is their signed distance and ``d_o`` the threshold: error ``e = d_o - d``,
 row ``n^T (J_pa - J_pb)`` (normalised form of (13)-(15) with both witness points
 moving), no feed-forward. Pairs are pruned by bounding spheres before coal is

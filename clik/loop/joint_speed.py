@@ -134,9 +134,14 @@ class JointSpeed:
         elif self.acceleration is not None:
             amax = np.full(model.nv, float(self.acceleration))
         if unlimited and warn:
+            where = (
+                "the MJCF model (MJCF gives no joint velocity limits)"
+                if getattr(robot, "mjcf", None) is not None
+                else "the URDF (<limit velocity=...> missing or 0)"
+            )
             warnings.warn(
                 f"joint_speed: joint(s) {', '.join(unlimited)} of {robot.name!r} have no velocity "
-                f"limit in the URDF (<limit velocity=...> missing or 0): the law keeps them "
+                f"limit in {where}: the law keeps them "
                 f"within default_velocity = {self.default_velocity:g} rad/s or m/s (times scale "
                 f"{self.scale:g}); set joint_speed.velocity to give theirs",
                 SpeedLimitWarning,

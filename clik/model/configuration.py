@@ -1,9 +1,11 @@
 """Configurations: joint values converted from what a user writes, and checked.
 
 Configurations are Pinocchio's: ``nq`` values, one per revolute or prismatic
-joint [rad or m], two (cos, sin) per continuous joint (then ``nv < nq``). The
-functions here take the model and the robot's name (for messages);
-:class:`~clik.model.robot.Robot` offers them as methods.
+joint [rad or m], two (cos, sin) per continuous joint (then ``nv < nq``), four
+``(x, y, cos, sin)`` for a planar base and seven ``(x, y, z, q_x, q_y, q_z, q_w)``
+for a floating one (:mod:`clik.model.base`). The functions here take the model and
+the robot's name (for messages); :class:`~clik.model.robot.Robot` offers them as
+methods.
 """
 
 from __future__ import annotations
@@ -14,7 +16,19 @@ import numpy as np
 import pinocchio as pin
 
 from clik.errors import InfeasibleError, InputError
-from clik.model.joints import CONTINUOUS, PRISMATIC, REVOLUTE, joint_kind, unit_scale
+from clik.model.base import normalised_rotation, written_base
+from clik.model.joints import (
+    CONTINUOUS,
+    FREE_FLYER,
+    PLANAR,
+    PRISMATIC,
+    REVOLUTE,
+    joint_kind,
+    unit_scale,
+)
+
+BASE_KINDS = (PLANAR, FREE_FLYER)
+"""Kinds of a mobile or floating base's joint."""
 
 
 def float_array(values: object, field: str, expected: str) -> np.ndarray:
@@ -45,8 +59,9 @@ def configuration(
     """
     scale = unit_scale(unit, f"{field} unit")
     joints = model.joints[1:]
+    kinds = [joint_kind(j) for j in joints]
     angle_form = model.nq != model.nv and all(
-        joint_kind(j) in (REVOLUTE, PRISMATIC, CONTINUOUS) for j in joints
+        kind in (REVOLUTE, PRISMATIC, CONTINUOUS, *BASE_KINDS) for kind in kinds
     )
     angle_unit = "deg" if unit == "deg" else "rad"
     expected = (
@@ -54,26 +69,55 @@ def configuration(
         f"m for prismatic ones] for {robot_name}"
     )
     if angle_form:
-        expected += f" (or {model.nv}, a continuous joint as its angle)"
+        expected += f" (or {model.nv}, a continuous joint as its angle"
+        if PLANAR in kinds:
+            expected += f", the planar base as x, y [m], yaw [{angle_unit}]"
+        if FREE_FLYER in kinds:
+            expected += f", the floating base as x, y, z [m], roll, pitch, yaw [{angle_unit}]"
+        expected += ")"
     array = float_array(values, field, expected)
     if array.shape == (model.nq,):
         q = array.copy()
-        for joint in joints:
-            if joint_kind(joint) == REVOLUTE:
+        for joint, kind in zip(joints, kinds, strict=True):
+            if kind == REVOLUTE:
                 q[joint.idx_q] *= scale
-        return q
+        return base_rotations(model, q, field)
     if angle_form and array.shape == (model.nv,):
         q = np.empty(model.nq)
-        for joint in joints:
+        for joint, kind in zip(joints, kinds, strict=True):
             value = float(array[joint.idx_v])
-            kind = joint_kind(joint)
             if kind == CONTINUOUS:
                 angle = value * scale
                 q[joint.idx_q : joint.idx_q + 2] = (math.cos(angle), math.sin(angle))
+            elif kind in BASE_KINDS:
+                written = array[joint.idx_v : joint.idx_v + joint.nv]
+                base = "planar" if kind == PLANAR else "floating"
+                q[joint.idx_q : joint.idx_q + joint.nq] = written_base(base, written, scale)
             else:
                 q[joint.idx_q] = value * scale if kind == REVOLUTE else value
         return q
     raise InputError(field, expected, got=shown(array))
+
+
+def base_rotations(model: pin.Model, q: np.ndarray, field: str) -> np.ndarray:
+    """``q`` with a base's rotation (planar (cos, sin), floating quaternion) normalised.
+
+    Pinocchio's integration and kinematics assume them unit; a norm within
+    :data:`~clik.model.base.QUATERNION_TOLERANCE` of 1 (values written with a few
+    digits) is normalised in place.
+
+    Raises:
+        InputError: A base's rotation whose norm is further from 1 (names ``field``).
+    """
+    for joint in model.joints[1:]:
+        kind = joint_kind(joint)
+        if kind == PLANAR:
+            i = joint.idx_q + 2
+            q[i : i + 2] = normalised_rotation(q[i : i + 2], field, "(cos, sin) pair")
+        elif kind == FREE_FLYER:
+            i = joint.idx_q + 3
+            q[i : i + 4] = normalised_rotation(q[i : i + 4], field, "quaternion (x, y, z, w)")
+    return q
 
 
 def check_within_limits(
@@ -92,7 +136,7 @@ def check_within_limits(
     for name, joint in zip(model.names[1:], model.joints[1:], strict=True):
         kind = joint_kind(joint)
         if kind not in (REVOLUTE, PRISMATIC):
-            continue  # continuous (cos, sin), spherical, free: no position limits
+            continue  # continuous (cos, sin), spherical, a base: no position limits
         i = joint.idx_q
         low = model.lowerPositionLimit[i]
         high = model.upperPositionLimit[i]

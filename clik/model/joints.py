@@ -2,7 +2,9 @@
 
 A *revolute* joint's value is an angle [rad] (degrees only where a scenario says
 ``unit = "deg"``), a *prismatic* joint's a length [m], always; a *continuous*
-joint (unlimited revolute) is stored as (cos, sin).
+joint (unlimited revolute) is stored as (cos, sin). A mobile or floating base
+(:mod:`clik.model.base`) is one joint of several values: *planar* ``(x, y, cos, sin)``
+[m, m, -, -] or *free-flyer* ``(x, y, z, q_x, q_y, q_z, q_w)`` [m, m, m, unit quaternion].
 """
 
 from __future__ import annotations
@@ -20,8 +22,14 @@ CONTINUOUS = "continuous"
 """Kind of an unlimited rotation: two configuration values (cos, sin), one DOF [rad]."""
 PRISMATIC = "prismatic"
 """Kind of a one-DOF translation: one value, a length [m] (never converted from degrees)."""
+PLANAR = "planar"
+"""Kind of a planar joint (a mobile base): ``(x, y, cos, sin)``, nq 4, nv 3 ``(v_x, v_y,
+omega)`` [m/s, m/s, rad/s]; its x and y are lengths [m], its (cos, sin) not an angle."""
+FREE_FLYER = "free-flyer"
+"""Kind of a free-flyer joint (a floating base): ``(x, y, z, q_x, q_y, q_z, q_w)``, nq 7, nv 6
+``(v, omega)`` [m/s, rad/s]; its x, y, z are lengths [m], its quaternion not an angle."""
 OTHER = "other"
-"""Kind of any other joint (planar, spherical, free-flyer): values not converted."""
+"""Kind of any other joint (spherical, ...): values not converted."""
 
 UNITS = ("rad", "deg")
 """Units of revolute joint values a user may write (prismatic values are always metres)."""
@@ -75,7 +83,30 @@ def joint_kind(joint: pin.JointModel) -> str:
         return PRISMATIC if name.startswith("JointModelP") else REVOLUTE  # PX, PY, PZ, Prismatic...
     if nq == 2 and nv == 1:
         return CONTINUOUS
+    if name == "JointModelPlanar":
+        return PLANAR
+    if name == "JointModelFreeFlyer":
+        return FREE_FLYER
     return OTHER
+
+
+LENGTHS = {PRISMATIC: 1, PLANAR: 2, FREE_FLYER: 3}
+"""How many of a joint kind's first configuration values are lengths [m]."""
+
+
+def joint_units(joint: pin.JointModel) -> list[str]:
+    """Unit of each of a joint's configuration values.
+
+    ``"rad"`` (revolute), ``"m"`` (prismatic; a base's x, y (and z)), ``""`` (a
+    continuous joint's cos and sin, a base's rotation, other joints).
+    """
+    kind = joint_kind(joint)
+    units = [""] * joint.nq
+    if kind == REVOLUTE:
+        units[0] = "rad"
+    for i in range(LENGTHS.get(kind, 0)):
+        units[i] = "m"
+    return units
 
 
 def q_slice(model: pin.Model, joint_id: int) -> slice:

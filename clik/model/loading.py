@@ -16,11 +16,16 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from lxml import etree
 
-from clik.errors import RobotLoadError, native_message
+from clik.errors import RobotLoadError, native_message, user_stacklevel
+from clik.model.base import BASE_JOINT, root_joint
 from clik.model.joints import PRISMATIC, REVOLUTE, joint_kind
 from clik.model.mesh_check import vertex_problem
+from clik.model.srdf import group_state_configuration, read_group_states
 from clik.model.urdf_check import parse_xml
+from clik.model.urdf_numbers import shown
+from clik.model.visual_meshes import MissingVisual
 
 
 class ReferenceClippedWarning(UserWarning):
@@ -36,7 +41,7 @@ class ReferenceClippedWarning(UserWarning):
 
 
 def build_models(
-    urdf: Path, package_dirs: list[str], text: str | None
+    urdf: Path, package_dirs: list[str], text: str | None, base: str = "fixed"
 ) -> tuple[pin.Model, pin.GeometryModel]:
     """Pinocchio's model and collision model of the file ``urdf``, or of ``text``.
 
@@ -44,17 +49,27 @@ def build_models(
         urdf: The URDF file (named in errors).
         package_dirs: Folders for ``package://`` and relative mesh files.
         text: The URDF expanded from the xacro file ``urdf``, or None to read ``urdf``.
+        base: ``"fixed"``, ``"planar"`` or ``"floating"``: the root joint
+            (:func:`clik.model.base.root_joint`, named
+            :data:`~clik.model.base.BASE_JOINT`) Pinocchio puts between the world and
+            the root link; the collision model is built on that model.
 
     Raises:
         RobotLoadError: Pinocchio refuses the description.
     """
+    root = root_joint(base)
+    rooted = {} if root is None else {"root_joint": root, "root_joint_name": BASE_JOINT}
     try:
         if text is None:
             model, collision_model = pin.buildModelsFromUrdf(
-                str(urdf), package_dirs=package_dirs, geometry_types=[pin.COLLISION]
+                str(urdf), package_dirs=package_dirs, geometry_types=[pin.COLLISION], **rooted
             )
         else:
-            model = pin.buildModelFromXML(text)
+            model = (
+                pin.buildModelFromXML(text)
+                if root is None
+                else pin.buildModelFromXML(text, root, BASE_JOINT)
+            )
             collision_model = pin.buildGeomFromUrdfString(
                 model, text, pin.COLLISION, package_dirs=package_dirs
             )
@@ -96,12 +111,19 @@ def digest(path: Path) -> str | None:
 
 
 def reference_configuration(model: pin.Model, srdf: Path | None, posture: str | None) -> np.ndarray:
-    """The SRDF's reference posture if there is one, else neutral clipped into the limits."""
+    """The SRDF's reference posture if there is one, else neutral clipped into the limits.
+
+    The posture is the SRDF's group state ``posture``
+    (:func:`clik.model.srdf.group_state_configuration`, from Pinocchio's neutral
+    configuration): a floating base's ``root_joint`` values are the planar base's x, y
+    and yaw, and are skipped by a fixed base.
+    """
     if srdf is not None and posture is not None:
-        parse_xml(srdf)
-        pin.loadReferenceConfigurations(model, str(srdf), False)
-        if posture in model.referenceConfigurations:
-            q = pin.normalize(model, model.referenceConfigurations[posture].copy())
+        states = read_group_states(srdf)
+        if posture in states:  # a fixed base skips the state's root_joint values
+            neutral = pin.neutral(model)
+            state = states[posture]
+            q = group_state_configuration(model, neutral, state, {BASE_JOINT}, "q_reference")
             return clipped_reference(model, q, posture)
     q = pin.neutral(model)
     return np.clip(q, model.lowerPositionLimit, model.upperPositionLimit)
@@ -139,7 +161,7 @@ def clipped_reference(model: pin.Model, q: np.ndarray, posture: str) -> np.ndarr
                 f"limits; clipped into them: {listed}",
                 clipped,
             ),
-            stacklevel=4,
+            stacklevel=user_stacklevel(),
         )
     return q
 
@@ -151,6 +173,7 @@ def read_visual_model(
     full_model: pin.Model,
     package_dirs: list[str],
     reduction: tuple[pin.Model, list[int], np.ndarray] | None,
+    missing_visuals: tuple[MissingVisual, ...] = (),
 ) -> pin.GeometryModel:
     """The visual geometry of the URDF ``path``, reduced like the robot's model.
 
@@ -162,6 +185,9 @@ def read_visual_model(
         package_dirs: Folders for ``package://`` and relative mesh files.
         reduction: ``(full model, locked joint ids, full configuration)`` of a robot
             with locked joints, or None.
+        missing_visuals: ``<visual>`` elements whose meshes were missing at loading
+            (:func:`~clik.model.visual_meshes.missing_visuals`): left out of the text
+            Pinocchio reads.
 
     Raises:
         RobotLoadError: The URDF was removed or changed since it was checked, or its
@@ -173,6 +199,11 @@ def read_visual_model(
             "the file was removed or changed since the robot was loaded "
             "(its visual geometry is read on first use); load the robot again",
         )
+    if missing_visuals:  # Pinocchio would throw on them (clik.model.visual_meshes)
+        data = urdf_text.encode("utf-8") if urdf_text is not None else _read_checked(path)
+        if urdf_text is None and source_digest not in (None, hashlib.sha256(data).hexdigest()):
+            raise RobotLoadError(path, "the file changed since the robot was loaded; load it again")
+        urdf_text = without_visuals(path, data, missing_visuals)
     try:
         if urdf_text is not None:
             visual = pin.buildGeomFromUrdfString(
@@ -189,3 +220,37 @@ def read_visual_model(
         reduced_from, joint_ids, q_full = reduction
         _, visual = pin.buildReducedModel(reduced_from, visual, joint_ids, q_full)
     return visual
+
+
+def _read_checked(path: Path) -> bytes:
+    """The bytes of the URDF ``path`` (read again for its visual geometry)."""
+    try:
+        return path.read_bytes()
+    except OSError as error:
+        raise RobotLoadError(path, f"cannot be read again ({error.strerror})") from None
+
+
+def without_visuals(path: Path, data: bytes, missing: tuple[MissingVisual, ...]) -> str:
+    """The URDF ``data`` without the ``<visual>`` elements in ``missing``.
+
+    Args:
+        path: The URDF file (named in errors).
+        data: Its bytes, as they were checked at loading (same elements, same order).
+        missing: The elements to leave out (:func:`missing_visuals` of the checked tree).
+
+    Raises:
+        RobotLoadError: ``data`` is not a URDF holding those elements (see
+            :func:`~clik.model.urdf_check.parse_xml`).
+    """
+    root = parse_xml(path, data).getroot()
+    links = {str(link.get("name")): link for link in root.iterfind("link")}
+    left_out = []
+    for item in missing:
+        link = links.get(item.link)
+        visuals = [] if link is None else link.findall("visual")
+        if link is None or item.index >= len(visuals):
+            raise RobotLoadError(path, f"link {shown(item.link)} lost a <visual> since loading")
+        left_out.append((link, visuals[item.index]))
+    for link, visual in left_out:  # removed once all are found: indices stay valid
+        link.remove(visual)
+    return etree.tostring(root, encoding="unicode")

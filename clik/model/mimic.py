@@ -24,7 +24,7 @@ import numpy as np
 import pinocchio as pin
 from lxml import etree
 
-from clik.errors import RobotLoadError
+from clik.errors import RobotLoadError, user_stacklevel
 from clik.model.joints import CONTINUOUS, PRISMATIC, joint_kind
 
 MAX_MIMIC = 1000.0
@@ -186,5 +186,5 @@ def warn_free_leaders(
             "them consistent",
             dict(free_leaders),
         ),
-        stacklevel=4,
+        stacklevel=user_stacklevel(),
     )

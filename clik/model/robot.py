@@ -1,11 +1,13 @@
-"""A fixed-base robot: Pinocchio's kinematic and geometry models, loaded safely.
+"""A robot: Pinocchio's kinematic and geometry models, loaded safely.
 
 :meth:`Robot.load` takes a URDF path, a xacro path (``arm.urdf.xacro``, expanded
 by :func:`clik.model.xacro_expand.expand_xacro`), the name of one of clik's robots
 (``planar4r``) or an example-robot-data name (``panda``, ``ur5``, ...)
 (:mod:`clik.model.sources`). Every URDF goes through
 :func:`clik.model.urdf_check.check_urdf` before Pinocchio reads it
-(:mod:`clik.model.loading`). The visual model is built on first use.
+(:mod:`clik.model.loading`). An MJCF (MuJoCo) model, a file whose root element is
+``<mujoco>`` (``arm3``, ``scene.xml``), is checked and read by :mod:`clik.model.mjcf`.
+The visual model is built on first use.
 
 Joint kinds and units are in :mod:`clik.model.joints`, locked joints in
 :mod:`clik.model.locking`, mimic joints (always locked) in
@@ -23,21 +25,20 @@ import pinocchio as pin
 
 from clik.errors import FrameNotFound, InputError, JointNotFound
 from clik.model import configuration as configurations
+from clik.model import srdf as srdf_files
+from clik.model.base import base_kind
 from clik.model.configuration import float_array, shown
-from clik.model.joints import PRISMATIC, REVOLUTE, JointValues, joint_kind
+from clik.model.joints import JointValues, joint_kind, joint_units
 from clik.model.loading import (
-    build_models,
-    check_mesh_extents,
-    digest,
     read_visual_model,
-    reference_configuration,
 )
-from clik.model.locking import lock_values, reduced, set_locked
-from clik.model.mimic import Mimic, mimic_joints, mimic_values, warn_free_leaders
+from clik.model.mimic import Mimic
+from clik.model.mjcf import mjcf_visual_model
+from clik.model.mjcf_check import MjcfDocument
 from clik.model.model_signature import check_unchanged, joint_signature, model_signature
-from clik.model.sources import available_robots, source_files
-from clik.model.urdf_check import check_urdf
-from clik.model.xacro_expand import check_xacro_args, expand_xacro, is_xacro
+from clik.model.robot_reader import read_robot
+from clik.model.sources import available_robots
+from clik.model.visual_meshes import MissingVisual
 
 PANDA_FINGERS = {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}
 """``lock`` for the Panda's fingers, closed: ``Robot.load("panda", lock=PANDA_FINGERS)``
@@ -45,7 +46,7 @@ has the 7 arm joints."""
 
 
 class Robot:
-    """A fixed-base robot model with its data.
+    """A robot model with its data: fixed to the world, or on a planar or floating base.
 
     Configurations are Pinocchio's: ``nq`` values, one per revolute or prismatic
     joint [rad or m], two (cos, sin) per continuous joint (then ``nv < nq``).
@@ -57,7 +58,8 @@ class Robot:
         xacro_args: The xacro arguments given to :meth:`load` (empty for a URDF).
         urdf_text: The URDF expanded from the xacro file ``source_path``, or None
             for a URDF file (whatever reads the robot's URDF again uses this text).
-        model: Pinocchio model (fixed base).
+        model: Pinocchio model; with a planar or floating base (:meth:`load`'s ``base``)
+            its first joint is the base (:mod:`clik.model.base`).
         data: Pinocchio data for ``model``.
         collision_model: Collision geometry (coal shapes).
         collision_data: Geometry data for ``collision_model``.
@@ -66,6 +68,18 @@ class Robot:
             ``lock`` given to :meth:`load` and the mimic followers it locked.
         signature: ``(nq, nv, njoints, nframes)`` of ``model`` when the robot was made
             (:meth:`check_model`).
+        mjcf: An MJCF model's checked document (:class:`~clik.model.mjcf_check.MjcfDocument`,
+            what Pinocchio read; its visual geometry is read from it), or None.
+        srdf_path: The SRDF file read (:mod:`clik.model.srdf`), or None.
+        disabled_collision_pairs: The SRDF's ``<disable_collisions>`` link pairs, each
+            sorted by name: self-collision rows skip them.
+        group_states: The SRDF's group states by name (:meth:`group_state`).
+        visual_links: Links with ``<visual>`` elements in the URDF (meshes missing or
+            not), known without reading the visual model; None for a robot not made
+            by :meth:`load`.
+        missing_visuals: The ``<visual>`` elements whose meshes were missing at loading
+            (:class:`~clik.model.visual_meshes.MissingVisual`): left out of
+            :attr:`visual_model`; the 3-D view draws those links' collision geometry.
 
     The model is the robot's for good: everything derived from it (``data``, limits,
     names, ``q_reference``, tasks, constraint sets, compiled solvers) is sized by it, so
@@ -106,6 +120,13 @@ class Robot:
         self.locked: dict[str, float] = {}
         self.xacro_args: dict[str, str] = {}
         self.urdf_text: str | None = None
+        self._model_text: str | None = None  # what Pinocchio read (clik.model.urdf_uris)
+        self.visual_links: frozenset[str] | None = None
+        self.missing_visuals: tuple[MissingVisual, ...] = ()
+        self.srdf_path: Path | None = None
+        self.disabled_collision_pairs: frozenset[tuple[str, str]] = frozenset()
+        self.group_states: Mapping[str, srdf_files.GroupState] = {}
+        self.mjcf: MjcfDocument | None = None  # an MJCF model's checked document
 
     # ------------------------------------------------------------------ loading
 
@@ -116,6 +137,9 @@ class Robot:
         package_dirs: Sequence[str | Path] | None = None,
         lock: Mapping[str, float] | None = None,
         xacro_args: Mapping[str, str] | None = None,
+        base: str = "fixed",
+        base_speed: Sequence[float] | None = None,
+        srdf: str | Path | bool | None = None,
     ) -> Robot:
         """Load a robot from a URDF or xacro file, or by name.
 
@@ -124,27 +148,35 @@ class Robot:
         reference configuration is the SRDF's reference posture where
         example-robot-data names one (the Panda's "default" ready pose), else
         Pinocchio's neutral configuration clipped into the joint limits.
+        A file whose root is ``<mujoco>`` is an MJCF model (:func:`clik.model.mjcf.load_mjcf`,
+        its ``home`` key as reference).
 
         Args:
             source: A URDF path (relative to the working folder), a xacro path
                 (name ending ``.xacro``) or a robot name.
             package_dirs: Folders holding the packages of ``package://`` meshes
-                and of xacro's ``$(find pkg)``; default: the file's folder and its
-                two parents, never the filesystem root (example-robot-data
-                robots: the loader's own folder).
+                and of xacro's ``$(find pkg)``, found by the name in their
+                ``package.xml`` anywhere below (a ROS workspace's ``src``), or as a
+                folder ``pkg`` directly in one (:mod:`clik.model.packages`; then
+                ``ROS_PACKAGE_PATH`` and ``AMENT_PREFIX_PATH`` when set); default:
+                the file's folder and its two parents, never the filesystem root
+                (example-robot-data robots: the loader's own folder).
             lock: Joints to lock, with their value [rad or m], e.g.
                 ``{"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}``;
                 the models are reduced to the other joints.
             xacro_args: Arguments of a xacro file, name -> value (strings), e.g.
                 ``{"n_links": "5"}``; only for a xacro ``source``.
+            srdf: An SRDF file (:mod:`clik.model.srdf`: disabled collision pairs, group
+                states); default the robot's own (example-robot-data's), False: none.
+            base: ``"fixed"`` (welded to the world), ``"planar"`` (a mobile base:
+                x, y, yaw) or ``"floating"`` (a free-flyer: position and
+                orientation); a planar or floating base is the model's first joint,
+                named ``"root_joint"`` (:mod:`clik.model.base`), unlimited in position.
+            base_speed: ``[linear m/s, angular rad/s]``, the base's speed limits
+                (default ``[1.0, 1.0]``, :data:`~clik.model.base.DEFAULT_LINEAR_SPEED`);
+                only with a planar or floating base.
 
-        Mimic joints (URDF ``<mimic>``, e.g. the Panda's ``panda_finger_joint2``)
-        are always locked, at ``multiplier * leader + offset`` (clipped into the
-        follower's limits), the leader taken at its ``lock`` value or else at its
-        reference; a follower named in ``lock`` takes that value instead. When a
-        locked follower's leader stays free, :class:`MimicJointWarning` names
-        them. A ``<mimic>`` whose leader is not a movable joint is ignored (the
-        follower stays free, as Pinocchio reads it).
+        Mimic joints are always locked (:mod:`clik.model.robot_reader`).
 
         Returns:
             The robot.
@@ -154,67 +186,21 @@ class Robot:
             RobotLoadError: The file is missing or invalid (including a ``<mimic>``
                 with a non-numeric multiplier or offset, or mimic joints that
                 follow each other in a cycle), or xacro cannot expand it (see
-                :func:`~clik.model.xacro_expand.expand_xacro`).
+                :func:`~clik.model.xacro_expand.expand_xacro`), or the SRDF is invalid.
             JointNotFound: A joint in ``lock`` does not exist.
-            InputError: A lock value is not finite or outside the joint's limits;
+            InputError: A lock value is not finite or outside the joint's limits; an
+                unknown ``base``, a bad ``base_speed`` or one for a fixed base; the base
+                joint in ``lock``;
                 ``xacro_args`` for a source that is not a xacro file, or not
                 strings, or missing an argument the file needs; a ``$(find pkg)``
-                with no folder ``pkg`` in ``package_dirs``.
+                with no package ``pkg`` in ``package_dirs``; two packages of one name
+                under one package folder (:mod:`clik.model.packages`).
 
         Warns:
             MimicJointWarning: Mimic followers were locked while their leader is free.
+            SrdfWarning: The SRDF names links the robot does not have.
         """
-        files = source_files(source)
-        urdf = files.urdf
-        dirs = [str(d) for d in (files.package_dirs if package_dirs is None else package_dirs)]
-        args = check_xacro_args(xacro_args)
-        if args and not is_xacro(urdf):
-            raise InputError("xacro_args", "a xacro source (a file ending in .xacro)", str(source))
-        text = expand_xacro(urdf, args, dirs) if is_xacro(urdf) else None
-
-        root = check_urdf(urdf, dirs, text)
-        mimics = mimic_joints(root, urdf)
-        source_digest = digest(urdf) if text is None else None  # xacro: the text is kept
-        model, collision_model = build_models(urdf, dirs, text)
-        check_mesh_extents(urdf, collision_model)
-        q_reference = reference_configuration(model, files.srdf, files.posture)
-        robot = cls(files.name, urdf.resolve(), dirs, model, collision_model, q_reference)
-        robot._source_digest = source_digest
-        robot.mimics = mimics
-        robot.xacro_args, robot.urdf_text = args, text
-        names = robot.joint_names
-        followers = [f for f, m in mimics.items() if f in names and m.leader in names]
-        return robot._locked(dict(lock or {}), mimics) if lock or followers else robot
-
-    def _locked(
-        self, lock: Mapping[str, float], mimics: Mapping[str, Mimic] | None = None
-    ) -> Robot:
-        """A new robot with the joints in ``lock`` fixed at the given values.
-
-        Mimic followers (``mimics``) not in ``lock`` are locked too, at the value
-        their leader implies (see :meth:`load`).
-        """
-        q_full = self.q_reference
-        values = lock_values(self.model, lock)
-        source = self.source_path or self.name
-        implied = mimic_values(self.model, self._q_reference, mimics or {}, values, source)
-        values.update({follower: value for follower, (_, value) in implied.items()})
-        free_leaders = {f: lv for f, lv in implied.items() if lv[0] not in values}
-        joint_ids = set_locked(self.model, q_full, values, lock)
-        if free_leaders:
-            warn_free_leaders(self.model, self.name, free_leaders)
-        model, collision_model, q_reference = reduced(
-            self.model, self.collision_model, joint_ids, q_full
-        )
-        robot = Robot(
-            self.name, self.source_path, self.package_dirs, model, collision_model, q_reference
-        )
-        robot._reduction = (self.model, joint_ids, q_full)
-        robot._source_digest = self._source_digest
-        robot.mimics = dict(self.mimics)
-        robot.xacro_args, robot.urdf_text = dict(self.xacro_args), self.urdf_text
-        robot.locked = values
-        return robot
+        return read_robot(cls, source, package_dirs, lock, xacro_args, base, base_speed, srdf)
 
     @staticmethod
     def available() -> dict[str, str]:
@@ -256,12 +242,15 @@ class Robot:
 
         Empty when the robot has no source file. The file is read again only if
         it is still the one checked by :meth:`load`; a robot expanded from xacro
-        reads its :attr:`urdf_text` instead.
+        reads its :attr:`urdf_text` instead. The ``<visual>`` elements whose meshes
+        were missing at loading (:attr:`missing_visuals`) are left out.
 
         Raises:
             RobotLoadError: The URDF was removed or changed since the robot was
                 loaded, or its visual meshes cannot be read.
         """
+        if self._visual_model is None and self.mjcf is not None:
+            self._visual_model = mjcf_visual_model(self.mjcf, self._full_model, self._reduction)
         if self._visual_model is None:
             path = self.source_path
             self._visual_model = (
@@ -270,10 +259,11 @@ class Robot:
                 else read_visual_model(
                     path,
                     self._source_digest,
-                    self.urdf_text,
+                    self.urdf_text if self._model_text is None else self._model_text,
                     self._full_model,
                     self.package_dirs,
                     self._reduction,
+                    self.missing_visuals,
                 )
             )
         return self._visual_model
@@ -293,6 +283,11 @@ class Robot:
         return self.model.nv
 
     @property
+    def base(self) -> str:
+        """``"fixed"``, ``"planar"`` or ``"floating"`` (:meth:`load`'s ``base``)."""
+        return base_kind(self.model)
+
+    @property
     def joint_names(self) -> list[str]:
         """Names of the movable joints in configuration order ("universe" excluded)."""
         return list(self.model.names[1:])
@@ -301,8 +296,9 @@ class Robot:
     def joint_kinds(self) -> dict[str, str]:
         """Kind of each movable joint, by name.
 
-        One of ``"revolute"``, ``"prismatic"``, ``"continuous"`` or ``"other"``
-        (see :data:`~clik.model.joints.REVOLUTE`...).
+        One of ``"revolute"``, ``"prismatic"``, ``"continuous"``, ``"planar"`` and
+        ``"free-flyer"`` (a base), or ``"other"`` (see
+        :data:`~clik.model.joints.REVOLUTE`...).
         """
         return {
             name: joint_kind(joint)
@@ -313,14 +309,12 @@ class Robot:
     def q_units(self) -> list[str]:
         """Unit of each configuration value, shape (nq,).
 
-        ``"rad"`` (revolute), ``"m"`` (prismatic) or ``""`` (a continuous joint's
-        cos and sin, other joints).
+        ``"rad"`` (revolute), ``"m"`` (prismatic, a base's x, y and z) or ``""`` (a
+        continuous joint's cos and sin, a base's rotation, other joints).
         """
         units = [""] * self.nq
         for joint in self.model.joints[1:]:
-            kind = joint_kind(joint)
-            if kind in (REVOLUTE, PRISMATIC):
-                units[joint.idx_q] = "rad" if kind == REVOLUTE else "m"
+            units[joint.idx_q : joint.idx_q + joint.nq] = joint_units(joint)
         return units
 
     @property
@@ -335,6 +329,11 @@ class Robot:
     def frame_names(self) -> list[str]:
         """Names of all the model's frames (links, joints, fixed joints)."""
         return [frame.name for frame in self.model.frames]
+
+    @property
+    def link_names(self) -> list[str]:
+        """Names of the robot's links (the URDF's ``<link>`` elements: body frames)."""
+        return [f.name for f in self.model.frames if f.type == pin.FrameType.BODY]
 
     @property
     def lower(self) -> np.ndarray:
@@ -396,29 +395,45 @@ class Robot:
         """
         return configurations.random_configuration(self.model, rng, margin)
 
+    def group_state(self, name: str, field: str = "group_state") -> np.ndarray:
+        """The configuration of the SRDF group state ``name`` (e.g. the Panda's ``"default"``).
+
+        Joints the state does not list keep their reference values, locked joints their
+        lock values (:func:`clik.model.srdf.state_configuration`); the limits are not
+        checked here (:meth:`check_within_limits`).
+
+        Raises:
+            InputError: No state ``name`` (the message lists the SRDF's states), or a
+                joint's value count does not fit the joint.
+        """
+        return srdf_files.state_configuration(self, name, field)
+
     def check_configuration(self, q: object, field: str = "q0") -> np.ndarray:
         """Convert a configuration to a float array and check it.
 
         A :class:`~clik.model.joints.JointValues` (a scenario's ``initial.q``) is
-        converted with :meth:`configuration`, in its unit.
+        converted with :meth:`configuration`, in its unit; a string ``"srdf:NAME"``
+        is the SRDF group state ``NAME`` (:meth:`group_state`).
 
         Args:
-            q: Joint values [rad or m], ``nq`` of them.
+            q: Joint values [rad or m], ``nq`` of them, or ``"srdf:NAME"``.
             field: Name of the input, used in the error message.
 
         Returns:
             A new float array of shape (nq,).
 
         Raises:
-            InputError: Not ``nq`` finite numbers.
+            InputError: Not ``nq`` finite numbers, or an unknown group state.
         """
+        if isinstance(q, str) and q.startswith(srdf_files.SRDF_PREFIX):
+            q = self.group_state(q[len(srdf_files.SRDF_PREFIX) :], field)
         if isinstance(q, JointValues):
             return self.configuration(q.written, q.unit, field)
         expected = f"an array of {self.nq} finite joint values [rad or m] for {self.name}"
         array = float_array(q, field, expected)
         if array.shape != (self.nq,):
             raise InputError(field, expected, got=shown(array))
-        return array
+        return configurations.base_rotations(self.model, array, field)
 
     def configuration(self, values: object, unit: str = "rad", field: str = "q0") -> np.ndarray:
         """A configuration from joint values as a user writes them.

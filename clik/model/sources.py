@@ -50,12 +50,12 @@ class ErdLoader(Protocol):
 
 
 def our_robots() -> dict[str, Path]:
-    """Our shipped robots: ``robots/<name>.urdf``."""
+    """Our shipped robots: ``robots/<name>.urdf`` and the MJCF models ``robots/<name>.xml``."""
     folder = importlib.resources.files("clik.robots")
     return {
-        entry.name.removesuffix(".urdf"): Path(str(entry))
+        Path(entry.name).stem: Path(str(entry))
         for entry in folder.iterdir()
-        if entry.name.endswith(".urdf")
+        if entry.name.endswith((".urdf", ".xml"))
     }
 
 
@@ -84,7 +84,7 @@ def source_files(source: str | Path) -> SourceFiles:
     """
     source_str = str(source)
     path = Path(source)
-    if path.is_file() or path.suffix in (".urdf", ".xacro") or "/" in source_str:
+    if path.is_file() or path.suffix in (".urdf", ".xacro", ".xml") or "/" in source_str:
         name = Path(path.name.removesuffix(".xacro")).stem if is_xacro(path) else path.stem
         return SourceFiles(name, path, parent_dirs(path))
     ours = our_robots()

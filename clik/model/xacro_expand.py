@@ -3,27 +3,31 @@
 :func:`expand_xacro` runs the ``xacro`` package (PyPI) on a ``.xacro`` file and
 returns the URDF text, which :meth:`clik.Robot.load` then checks like any URDF
 (:func:`clik.model.urdf_check.check_urdf`). Without ROS, xacro cannot resolve
-``$(find pkg)``; here a package ``pkg`` is the folder ``pkg`` in one of the
-``package_dirs``, as for ``package://pkg/...`` meshes.
+``$(find pkg)``; here the package ``pkg`` is found as for ``package://pkg/...``
+meshes, by the name in its ``package.xml`` under the ``package_dirs`` (or a folder
+``pkg`` directly in one of them; see :mod:`clik.model.packages`).
 
 Xacro reads files (``<xacro:include>``, ``xacro.load_yaml``) and keeps its state in
 module globals. For the length of one call, under a lock, clik replaces:
 
 - ``substitution_args._eval_find`` (and ``find`` in ``$(eval ...)``): the
-  ``package_dirs`` lookup above;
+  package lookup above;
 - ``xacro.parse`` and xacro's ``open``: every file xacro reads must resolve
   (symlinks followed) inside a *root*: the xacro file's folder, the package
-  folder that holds it, or a package found by ``$(find)``; XML files are read
-  strictly first (:func:`clik.model.urdf_check.parse_xml`: no entities, no external
-  DTD, no XInclude). Xacro never fetches anything over the network.
+  that holds it (its nearest folder with a ``package.xml``, up to the package
+  folder holding the file; else the folder directly in that package folder), or
+  a package found by ``$(find)``; XML files are read strictly first
+  (:func:`clik.model.urdf_check.parse_xml`: no entities, no external DTD, no
+  XInclude). Xacro never fetches anything over the network.
 
 Everything is put back when the call returns or raises, and xacro's messages
 on stderr become :class:`XacroWarning` warnings.
 
 Errors: a ``$(arg name)`` that is neither given nor declared with a default,
 or a given argument the file never declares nor uses, is an
-:class:`~clik.errors.InputError` on ``xacro_args``; an unknown package an
-:class:`~clik.errors.InputError` on ``package_dirs``; a file outside the roots
+:class:`~clik.errors.InputError` on ``xacro_args``; an unknown package (or two of
+one name under a package folder) an :class:`~clik.errors.InputError` on
+``package_dirs``; a file outside the roots
 or any xacro error (syntax, undefined property, ...) a
 :class:`~clik.errors.RobotLoadError` naming the file.
 """
@@ -31,6 +35,7 @@ or any xacro error (syntax, undefined property, ...) a
 from __future__ import annotations
 
 import contextlib
+import difflib
 import io
 import re
 import threading
@@ -40,7 +45,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from clik.errors import SHOWN_CHARACTERS, ClikError, InputError, RobotLoadError
+from clik.errors import SHOWN_CHARACTERS, ClikError, InputError, RobotLoadError, user_stacklevel
+from clik.model.packages import MANIFEST, PackageDirs, package_dirs_of
 from clik.model.urdf_check import parse_xml
 
 XACRO_SUFFIX = ".xacro"
@@ -86,14 +92,16 @@ def expand_xacro(
     Args:
         path: The ``.xacro`` file.
         xacro_args: Values of its ``<xacro:arg>`` / ``$(arg ...)`` arguments.
-        package_dirs: Folders holding the packages named by ``$(find pkg)``.
+        package_dirs: Folders holding the packages named by ``$(find pkg)``
+            (a :class:`~clik.model.packages.PackageDirs` keeps its searches).
 
     Returns:
         The expanded XML (a URDF, not yet checked).
 
     Raises:
         InputError: A bad ``xacro_args`` (not strings; an argument missing or
-            unknown) or a ``$(find pkg)`` with no folder ``pkg`` in ``package_dirs``.
+            unknown); a ``$(find pkg)`` with no package ``pkg`` in ``package_dirs``,
+            or two of them under one folder.
         RobotLoadError: The file (or a file it reads) is missing, outside its
             roots, not strict XML, or xacro cannot expand it.
     """
@@ -101,7 +109,7 @@ def expand_xacro(
     file = Path(path)
     if not file.is_file():
         raise RobotLoadError(file, "is a folder, not a file" if file.is_dir() else "file not found")
-    scope = _Scope(file.resolve(), [Path(d) for d in package_dirs])
+    scope = _Scope(file.resolve(), package_dirs_of(package_dirs))
     given = _TrackedArgs(args)
     messages = io.StringIO()
     with _LOCK, _patched_xacro(scope) as xacro, contextlib.redirect_stderr(messages):
@@ -113,14 +121,15 @@ def expand_xacro(
     if messages.getvalue().strip():
         warnings.warn(
             XacroWarning(f"xacro, expanding {file}: {' '.join(messages.getvalue().split())}"),
-            stacklevel=2,
+            stacklevel=user_stacklevel(),
         )
     unknown = sorted(set(args) - given.asked)
     if unknown:
         known = ", ".join(repr(a) for a in sorted(given.asked)) or "none"
+        guess = _did_you_mean(unknown, given.asked)
         raise InputError(
             "xacro_args",
-            f"arguments that {file} declares or uses ({known})",
+            f"arguments that {file} declares or uses ({known}){guess}",
             got={k: args[k] for k in unknown},
         )
     return text
@@ -158,12 +167,12 @@ class _Scope:
 
     Attributes:
         file: The xacro file (symlinks resolved).
-        package_dirs: Folders holding packages (``$(find pkg)`` is ``<dir>/pkg``).
+        package_dirs: Folders holding packages, with their searches.
         roots: Folders (resolved) whose files xacro may read.
     """
 
     file: Path
-    package_dirs: list[Path]
+    package_dirs: PackageDirs
     roots: list[Path] = field(default_factory=list)
     read: list[Path] = field(default_factory=list)
     """The files xacro opened so far (the file itself first)."""
@@ -171,12 +180,12 @@ class _Scope:
     def __post_init__(self) -> None:
         self.read.append(self.file)
         self._add_root(self.file.parent)
-        for folder in self.package_dirs:  # the package holding the file, if any
-            base = folder.resolve()
-            if self.file.is_relative_to(base):
-                package = base / self.file.relative_to(base).parts[0]
-                if package.is_dir():
-                    self._add_root(package)
+        dirs = self.package_dirs
+        bases = [*dirs.folders, *dirs.ros_folders, *(p / "share" for p in dirs.ament_prefixes)]
+        for folder in bases:  # the package holding the file, if any
+            package = _package_holding(self.file, folder.resolve())
+            if package is not None:
+                self._add_root(package)
 
     def _add_root(self, folder: Path) -> None:
         """Let xacro read the files under ``folder`` (resolved), unless already allowed."""
@@ -187,20 +196,18 @@ class _Scope:
         """The folder of ``package`` (``$(find package)``), now a root too.
 
         Raises:
-            InputError: No folder ``package`` in ``package_dirs`` (or a name with a path in it).
+            InputError: No package ``package`` in ``package_dirs`` (or a name with a path
+                in it), or two under one folder.
         """
-        named = package not in ("", ".", "..") and not any(c in package for c in "/\\")
-        for folder in self.package_dirs if named else []:
-            candidate = folder / package
-            if candidate.is_dir():
-                resolved = candidate.resolve()
-                self._add_root(resolved)
-                return str(resolved)
-        searched = ", ".join(str(d) for d in self.package_dirs) or "none given"
+        found = self.package_dirs.find(package)
+        if found is not None:
+            self._add_root(found.folder)
+            return str(found.folder)
         raise InputError(
             "package_dirs",
-            f"a folder holding the package {package!r} named by $(find {package}) in "
-            f"{self.file} (package folders searched: {searched})",
+            f"a folder holding the package {package!r} (a package.xml naming it, or a "
+            f"folder of that name) named by $(find {package}) in {self.file} (package "
+            f"folders searched: {self.package_dirs.searched()})",
         )
 
     def readable(self, name: str) -> Path:
@@ -221,6 +228,24 @@ class _Scope:
         if resolved not in self.read:
             self.read.append(resolved)
         return resolved
+
+
+def _package_holding(file: Path, base: Path) -> Path | None:
+    """The package folder holding ``file`` under the package folder ``base`` (both resolved).
+
+    Its nearest folder with a ``package.xml``, ``base`` included; else, as before
+    workspaces were searched, the folder directly in ``base`` that holds it; None
+    outside ``base``.
+    """
+    if not file.is_relative_to(base):
+        return None
+    for folder in file.parents:
+        if (folder / MANIFEST).is_file():
+            return folder
+        if folder == base:
+            break
+    legacy = base / file.relative_to(base).parts[0]
+    return legacy if legacy.is_dir() else None
 
 
 @contextlib.contextmanager
@@ -298,10 +323,12 @@ def _clik_error(
     declared = _declared_args(scope.read)
     unknown = sorted(set(given) - given.asked - set(declared))
     if unknown:  # a misspelt argument: said, not the failure it causes further on
-        known = ", ".join(repr(a) for a in sorted(given.asked | set(declared))) or "none"
+        names = given.asked | set(declared)
+        known = ", ".join(repr(a) for a in sorted(names)) or "none"
         return InputError(
             "xacro_args",
-            f"arguments that {scope.file} declares or uses ({known}); the expansion then "
+            f"arguments that {scope.file} declares or uses ({known})"
+            f"{_did_you_mean(unknown, names)}; the expansion then "
             f"failed: {' '.join(str(error).split())[:SHOWN_CHARACTERS]}",
             got={k: given[k] for k in unknown},
         )
@@ -316,6 +343,16 @@ def _clik_error(
     where = [f for f in files if f and Path(f).resolve() != scope.file]
     inside = f" (in {where[-1]}, included from {scope.file})" if where else ""
     return RobotLoadError(scope.file, f"xacro cannot expand it{inside}: {message}")
+
+
+def _did_you_mean(unknown: list[str], known: set[str]) -> str:
+    """``"; did you mean 'ur_type' for 'ur_typ'?"``: the closest known name of each unknown."""
+    guesses = [
+        f"{close[0]!r} for {name!r}"
+        for name in unknown
+        if (close := difflib.get_close_matches(name, sorted(known), n=1, cutoff=0.6))
+    ]
+    return f"; did you mean {', '.join(guesses)}?" if guesses else ""
 
 
 _ARG = re.compile(r"""<xacro:arg\s[^>]*?name\s*=\s*["']([^"']+)["']([^>]*)>""")

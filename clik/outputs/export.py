@@ -7,8 +7,11 @@ model, named by its joint: a revolute or prismatic joint gives its position
 along the trajectory (so it never jumps by 2 pi and may leave ``(-pi, pi]``).
 A joint of any other kind (spherical, planar, free-flyer: several velocity
 coordinates) cannot be written as one angle per name and is refused
-(:class:`ExportError`). Joints locked out of the model (``Robot.load(lock=...)``,
-mimic followers) are not listed.
+(:class:`ExportError`): in particular a robot loaded with a planar or floating base
+(``Robot.load(base=...)``, :mod:`clik.model.base`), whose message says so. Its base's
+pose per sample is in the run's record (``trajectory.npz``'s ``q``: the first 4
+values ``(x, y, cos, sin)``, or 7 ``(x, y, z, q_x, q_y, q_z, q_w)``). Joints locked
+out of the model (``Robot.load(lock=...)``, mimic followers) are not listed.
 
 Per exported sample:
 
@@ -50,6 +53,7 @@ from typing import Any
 import numpy as np
 
 from clik.errors import ExportError, InputError
+from clik.model.base import BASE_JOINT, FIXED, base_kind
 from clik.outputs.io import atomic_write
 
 FORMATS = ("csv", "json")
@@ -115,6 +119,14 @@ def check_exportable(model: Any) -> None:
     """
     for name, joint in zip(list(model.names)[1:], list(model.joints)[1:], strict=True):
         if joint.nv != 1 or joint.nq not in (1, 2):
+            if name == BASE_JOINT and base_kind(model) != FIXED:
+                raise ExportError(
+                    f"joint {name!r} is the robot's {base_kind(model)} base ({joint.shortname()}, "
+                    f"nq {joint.nq}, nv {joint.nv}): a controller's joint trajectory has no "
+                    "entry for a base's pose; the run's trajectory.npz holds it per sample "
+                    f"(q[:, :{joint.nq}]), only revolute, prismatic and continuous joints can "
+                    "be exported"
+                )
             raise ExportError(
                 f"joint {name!r} ({joint.shortname()}, nq {joint.nq}, nv {joint.nv}) has no "
                 "single position per velocity; only revolute, prismatic and continuous "

@@ -90,6 +90,9 @@ class Run:
             result.info["unmonitored_geometries"] = list(scene.skipped_geometries)
         if self.scenario.robot.get("xacro_args"):
             result.info["robot_xacro_args"] = dict(self.scenario.robot["xacro_args"])
+        if self.scenario.robot.get("base", "fixed") != "fixed":  # clik show rebuilds it
+            result.info["robot_base"] = self.scenario.robot["base"]
+            result.info["robot_base_speed"] = self.scenario.robot.get("base_speed")
         if self.goals:
             result.info["task_units"] = {str(g.name): error_unit(g.task) for g in self.goals}
         return result
@@ -106,7 +109,7 @@ def _where(scenario: Scenario, key: str, exc: ClikError) -> ScenarioError:
 def _robot_key(exc: ClikError) -> str:
     """The ``[robot]`` key a robot's loading error is about (``lock`` unless it says)."""
     field = str(getattr(exc, "field", ""))
-    for key in ("xacro_args", "package_dirs"):
+    for key in ("xacro_args", "package_dirs", "srdf"):
         if field.startswith(key):
             return f"robot.{key}"
     return "robot.lock"
@@ -171,11 +174,16 @@ def _robot(scenario: Scenario) -> Robot:
             package_dirs=spec["package_dirs"] or None,
             lock=spec["lock"] or None,
             xacro_args=spec.get("xacro_args") or None,
+            srdf=spec.get("srdf"),
+            base=spec.get("base", "fixed"),
+            base_speed=spec.get("base_speed"),
         )
     except (JointNotFound, InputError) as exc:
         raise _where(scenario, _robot_key(exc), exc) from None
     except ClikError as exc:
-        raise _where(scenario, "robot.source", exc) from None
+        srdf = spec.get("srdf")
+        about_srdf = isinstance(srdf, str) and Path(getattr(exc, "source", "")) == Path(srdf)
+        raise _where(scenario, "robot.srdf" if about_srdf else "robot.source", exc) from None
 
 
 def _single_task(scenario: Scenario, robot: Robot, q0: np.ndarray) -> tuple[Task, Trajectory]:

@@ -21,8 +21,8 @@ One task is ``[task]`` and ``[trajectory]``; several are ``[[tasks]]``, each wit
 (:mod:`clik.scenarios.task_tables`). ``[task]`` and ``[[tasks]]`` together are refused.
 
 A scenario is data only: TOML has no code, no includes and no variables, and
-no key here names a file to read but ``robot.source``, ``robot.package_dirs``
-and an obstacle's mesh ``file``: paths the user chose (absolute, or relative
+no key here names a file to read but ``robot.source``, ``robot.package_dirs``,
+``robot.srdf`` and an obstacle's mesh ``file``: paths the user chose (absolute, or relative
 to the scenario's folder; URLs are refused, nothing is fetched). A xacro
 ``robot.source`` (``.xacro``) takes ``robot.xacro_args``, a table of strings.
 """
@@ -39,6 +39,7 @@ from clik.bounds import MAX_STEPS, SCALE_RANGE
 from clik.constraints.registry import TABLE_KINDS
 from clik.engine import ENGINES
 from clik.errors import ScenarioError
+from clik.model.base import BASES, FIXED, check_base_speed
 from clik.model.joints import JointValues
 from clik.model.xacro_expand import is_xacro
 from clik.scenarios.fields import UNITS, angle_scale, gain_value, strings, trajectory_table
@@ -71,7 +72,9 @@ class Scenario:
     """A validated scenario. Angles are in radians, lengths in metres, times in seconds.
 
     Joint values are the exception (see the module's docstring): ``initial_q`` is
-    a :class:`~clik.model.joints.JointValues` (the values as written and their ``unit``)
+    a :class:`~clik.model.joints.JointValues` (the values as written and their ``unit``),
+    a string ``"srdf:NAME"`` (the SRDF group state ``NAME``, converted by
+    :meth:`Robot.check_configuration <clik.model.robot.Robot.check_configuration>`)
     or None for the reference configuration, and
     ``constraints["joint_limits"]`` has ``override`` (scaled as angles [rad]),
     ``override_as_written`` (in ``unit`` for revolute joints, metres for
@@ -82,7 +85,7 @@ class Scenario:
     file: Path
     name: str
     robot: dict[str, Any]
-    initial_q: JointValues | None
+    initial_q: JointValues | str | None
     task: dict[str, Any]
     trajectory: dict[str, Any]
     solver: dict[str, Any]
@@ -152,7 +155,15 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
     unit = ini.string("unit", "rad", UNITS)
     q_raw = ini.raw("q", "reference")
     q_bound = MAX_JOINT_VALUE / angle_scale(ini)
-    initial_q = None if q_raw == "reference" else JointValues(ini.vector("q", bound=q_bound), unit)
+    initial_q: JointValues | str | None = None
+    if isinstance(q_raw, str):
+        if q_raw != "reference" and not _group_state_name(q_raw):
+            raise ini.error(
+                "q", "'reference', 'srdf:NAME' (a group state) or a list of joint values", q_raw
+            )
+        initial_q = None if q_raw == "reference" else q_raw
+    else:
+        initial_q = JointValues(ini.vector("q", bound=q_bound), unit)
     ini.done()
 
     if top.has("tasks"):
@@ -265,18 +276,53 @@ def check_dt(slv: Table, dt: float, duration: float) -> None:
         )
 
 
+def _group_state_name(value: str) -> str:
+    """``NAME`` of an ``initial.q = "srdf:NAME"``, or ``""`` for another string."""
+    prefix, _, name = value.partition(":")
+    return name if prefix == "srdf" and name.strip() == name else ""
+
+
+def _srdf(rob: Table, folder: Path) -> str | bool | None:
+    """``robot.srdf``: a path (resolved like ``source``), false (none) or None (the robot's own)."""
+    value = rob.raw("srdf", None)
+    if value is None or value is False:
+        return value
+    expected = "an SRDF file path, or false (not even the robot's own SRDF)"
+    if not isinstance(value, str) or not value.strip() or "://" in value:
+        raise rob.error("srdf", expected + " (URLs are not fetched)", value)
+    return _resolve(folder, value)
+
+
+def _base_speed(rob: Table) -> list[float] | None:
+    """``robot.base_speed``: ``[linear m/s, angular rad/s]``, or None (the defaults)."""
+    value = rob.vector("base_speed", 2, None, "[m/s, rad/s]", MAX_SPEED)
+    if value is not None and not all(v > 0.0 for v in value):
+        raise rob.error("base_speed", "two positive speeds [m/s, rad/s]", value)
+    return None if value is None else list(check_base_speed(value, "robot.base_speed"))
+
+
 def _robot(rob: Table, folder: Path) -> dict[str, Any]:
-    """The ``[robot]`` table: ``source``, ``package_dirs``, ``lock``, ``xacro_args``."""
+    """The ``[robot]`` table: the robot, its files, locked joints and base.
+
+    Keys ``source``, ``package_dirs``, ``lock``, ``xacro_args``, ``srdf``, ``base``
+    (``"fixed"``, ``"planar"``, ``"floating"``) and ``base_speed`` ([m/s, rad/s]).
+    """
     source = rob.string("source")
     if "://" in source:
         raise rob.error("source", "a robot name or a URDF path (URLs are not fetched)", source)
-    looks_like_path = source.endswith((".urdf", ".xacro")) or "/" in source or "\\" in source
+    suffixes = (".urdf", ".xacro", ".xml")  # .xml: an MJCF model (or a URDF)
+    looks_like_path = source.endswith(suffixes) or "/" in source or "\\" in source
     robot = {
         "source": _resolve(folder, source) if looks_like_path else source,
         "package_dirs": [_resolve(folder, p) for p in strings(rob, "package_dirs")],
         "lock": rob.mapping("lock", lambda t, k: float(t.number(k, bound=MAX_JOINT_VALUE))),
         "xacro_args": rob.mapping("xacro_args", lambda t, k: t.string(k)),
+        "srdf": _srdf(rob, folder),
+        "base": rob.string("base", FIXED, BASES),
+        "base_speed": _base_speed(rob),
     }
+    if robot["base_speed"] is not None and robot["base"] == FIXED:
+        raise rob.error("base_speed", "no base_speed: robot.base is 'fixed' (no base to move)")
     if robot["xacro_args"] and not is_xacro(source):
         raise rob.error(
             "xacro_args", "no xacro_args: robot.source is not a xacro file (name ending .xacro)"

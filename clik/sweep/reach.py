@@ -136,7 +136,10 @@ def _build(spec: ReachSpec) -> tuple[Robot, Task, ConstraintSet | None]:
     lock = {**source["lock"], **spec.lock}
     try:
         robot = Robot.load(
-            source["source"], package_dirs=source["package_dirs"] or None, lock=lock or None
+            source["source"],
+            package_dirs=source["package_dirs"] or None,
+            lock=lock or None,
+            srdf=source.get("srdf"),
         )
     except RobotLoadError as exc:
         raise ScenarioError(scenario.file, "robot.source", str(exc)) from None

@@ -33,7 +33,7 @@ from clik.viz.commands import (
 )
 from clik.viz.html import Recorder, page
 from clik.viz.obstacle_layer import obstacle_commands
-from clik.viz.robot_layer import joint_path, robot_commands
+from clik.viz.robot_layer import drawn_geometry, joint_path, robot_commands
 from clik.viz.timeline import frame_origins, joint_placements
 
 if TYPE_CHECKING:
@@ -110,7 +110,7 @@ def reach_commands(
         obstacles: The obstacles as :meth:`clik.constraints.ConstraintSet.obstacle_info`
             lists them, or None.
     """
-    gmodel = robot.visual_model if robot.visual_model.ngeoms else robot.collision_model
+    gmodel = drawn_geometry(robot)
     commands: list[Command] = [
         delete("/meshcat"),
         set_property("/Background", "top_color", list(palette.BACKGROUND_TOP)),

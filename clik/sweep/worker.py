@@ -64,6 +64,7 @@ def robot_key(spec: dict[str, Any]) -> tuple[Any, ...]:
         tuple(spec["package_dirs"]),
         tuple(sorted((k, float(v)) for k, v in spec["lock"].items())),
         tuple(sorted(spec.get("xacro_args", {}).items())),
+        spec.get("srdf"),
     )
 
 
@@ -84,6 +85,7 @@ def cached_robot(spec: dict[str, Any]) -> Robot:
             package_dirs=spec["package_dirs"] or None,
             lock=spec["lock"] or None,
             xacro_args=spec.get("xacro_args") or None,
+            srdf=spec.get("srdf"),
         )
         cache[key] = robot
         with _count_lock:

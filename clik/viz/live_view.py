@@ -27,7 +27,7 @@ from clik.viz.commands import (
 from clik.viz.geometry import sphere
 from clik.viz.live import live_server
 from clik.viz.obstacle_layer import obstacle_commands, obstacle_path, placement
-from clik.viz.robot_layer import joint_path, robot_commands
+from clik.viz.robot_layer import drawn_geometry, joint_path, robot_commands
 
 if TYPE_CHECKING:
     from clik.constraints import ConstraintSet
@@ -63,9 +63,7 @@ class LiveView:
         self.obstacles: list[dict[str, Any]] = (
             [] if constraints is None else constraints.obstacle_info()
         )
-        gmodel = robot.collision_model if geometry == "collision" else robot.visual_model
-        if gmodel.ngeoms == 0:
-            gmodel = robot.collision_model
+        gmodel = drawn_geometry(robot, geometry)
         commands: list[Command] = [
             delete("/meshcat"),
             set_property("/Background", "top_color", list(palette.BACKGROUND_TOP)),

@@ -6,6 +6,12 @@ of that joint's body is a child node at its fixed placement ``jMg``. Links of
 a joint whose range row is active turn :data:`~clik.viz.palette.JOINT_LIMIT_ACTIVE`
 (inside the threshold without an active row: :data:`~clik.viz.palette.JOINT_LIMIT_NEAR`),
 by discrete ``material.color`` tracks.
+
+What is drawn (:func:`drawn_geometry`): the visual geometry, except that a link
+whose visual mesh was missing at loading
+(:attr:`~clik.model.robot.Robot.missing_visuals`) is drawn with its collision
+geometry instead, and a robot with no visual geometry at all is drawn with its
+collision geometry; or, on request, the collision geometry alone.
 """
 
 from __future__ import annotations
@@ -47,6 +53,40 @@ def node_name(name: str) -> str:
 def joint_path(model: pin.Model, joint: int) -> str:
     """Scene path of joint ``joint``'s node."""
     return f"{ROOT}/{node_name(model.names[joint])}"
+
+
+def drawn_geometry(robot: Robot, geometry: str = "visual") -> pin.GeometryModel:
+    """The geometry that draws ``robot``: ``"visual"`` (with fallbacks) or ``"collision"``.
+
+    With ``"visual"``, a link with a missing visual mesh shows its collision geometry in
+    place of all its visual geometry (never half drawn), and a robot whose visual model
+    is empty shows its collision model.
+
+    Args:
+        robot: The robot.
+        geometry: ``"visual"`` or ``"collision"`` (checked by the caller).
+
+    Returns:
+        The robot's own collision or visual model, or a new model holding visual and
+        collision geometry objects (the same shapes, not copied).
+    """
+    if geometry == "collision":
+        return robot.collision_model
+    visual = robot.visual_model
+    if visual.ngeoms == 0:
+        return robot.collision_model
+    if not robot.missing_visuals:
+        return visual
+    frames = robot.model.frames
+    stand_in = {missing.link for missing in robot.missing_visuals}
+    drawn = pin.GeometryModel()
+    for go in visual.geometryObjects:
+        if frames[go.parentFrame].name not in stand_in:
+            drawn.addGeometryObject(go)
+    for go in robot.collision_model.geometryObjects:
+        if frames[go.parentFrame].name in stand_in:
+            drawn.addGeometryObject(go)
+    return drawn
 
 
 def robot_commands(

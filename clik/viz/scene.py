@@ -29,6 +29,7 @@ from clik.viz.commands import Command, delete, set_animation, set_property
 from clik.viz.obstacle_layer import obstacle_commands, obstacle_tracks, placement
 from clik.viz.path_layer import reference_commands, trail_commands
 from clik.viz.robot_layer import (
+    drawn_geometry,
     highlight_tracks,
     joint_range_states,
     joint_tracks,
@@ -180,15 +181,16 @@ def build_scene(
 
 
 def _geometry_model(robot: Robot, geometry: Geometry) -> pin.GeometryModel:
-    """The geometry drawn: visual meshes (collision geometry when there are none).
+    """The geometry drawn: visual meshes, collision geometry where they are missing.
+
+    See :func:`~clik.viz.robot_layer.drawn_geometry`.
 
     Raises:
         InputError: An unknown ``geometry``.
     """
     if geometry not in GEOMETRIES:
         raise InputError("geometry", " or ".join(repr(g) for g in GEOMETRIES), got=geometry)
-    gmodel = robot.visual_model if geometry == "visual" else robot.collision_model
-    return robot.collision_model if gmodel.ngeoms == 0 else gmodel
+    return drawn_geometry(robot, geometry)
 
 
 def _path_layer(

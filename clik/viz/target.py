@@ -7,8 +7,9 @@ loaded (package folders, locked joints). The robot is rebuilt from, in order:
 1. ``info["scenario_file"]``, when it names an existing scenario file;
 2. the shipped scenario whose ``name`` equals ``info["scenario"]`` (the case study);
 3. ``info["robot_source"]`` (or ``info["robot"]``) with ``info["robot_lock"]``,
-   ``info["package_dirs"]`` and ``info["robot_xacro_args"]`` when present, if its
-   configuration size matches the run's.
+   ``info["package_dirs"]``, ``info["robot_xacro_args"]`` and ``info["robot_base"]``
+   (with ``info["robot_base_speed"]``) when present, if its configuration size
+   matches the run's.
 
 Otherwise :class:`~clik.errors.InputError` says what is missing.
 """
@@ -85,6 +86,8 @@ def rebuild_robot(result: TrackingResult, source: Path) -> Robot:
             "package_dirs": info.get("package_dirs") or [],
             "lock": info.get("robot_lock") or info.get("lock") or {},
             "xacro_args": info.get("robot_xacro_args") or {},
+            "base": info.get("robot_base") or "fixed",
+            "base_speed": info.get("robot_base_speed"),
         }
         robot = _load(spec, tried)
         if robot is not None and robot.nq == nq:
@@ -133,6 +136,8 @@ def _load(spec: dict[str, Any], tried: list[str]) -> Robot | None:
             package_dirs=spec.get("package_dirs") or None,
             lock=spec.get("lock") or None,
             xacro_args=spec.get("xacro_args") or None,
+            base=spec.get("base") or "fixed",
+            base_speed=spec.get("base_speed"),
         )
     except ClikError as exc:
         tried.append(str(exc))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -286,3 +288,15 @@ def test_check_configuration_rejects(planar4r, q, got):
         "scenario.q0: expected an array of 4 finite joint values [rad or m] for planar4r, got "
     )
     assert got in str(caught.value)
+
+
+def test_load_warnings_point_at_the_callers_line():
+    """Warnings raised deep in loading name the line that called ``Robot.load``."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        Robot.load("kinova")  # its reference posture is clipped into its limits
+        Robot.load("panda")  # its mimic finger locked, its leader free
+    kinds = {w.category.__name__: w for w in caught}
+    assert {"ReferenceClippedWarning", "MimicJointWarning"} <= set(kinds)
+    for w in caught:
+        assert w.filename == __file__, (w.category.__name__, w.filename)

@@ -100,8 +100,11 @@ def test_malformed_xml_gives_the_line(tmp_path):
 
 
 def mesh_robot(filename: str) -> str:
-    visual = f'<visual><geometry><mesh filename="{filename}"/></geometry></visual>'
-    return robot(LINKS.replace('<link name="l1"/>', f'<link name="l1">{visual}</link>') + J1 + J2)
+    # a collision mesh: required (a missing visual mesh is a warning, test_visual_meshes.py)
+    collision = f'<collision><geometry><mesh filename="{filename}"/></geometry></collision>'
+    return robot(
+        LINKS.replace('<link name="l1"/>', f'<link name="l1">{collision}</link>') + J1 + J2
+    )
 
 
 def test_missing_mesh_file_is_named(tmp_path):

@@ -228,11 +228,17 @@ def test_a_misspelt_argument_is_named_when_the_expansion_fails(tmp_path):
     message = str(caught.value)
     assert caught.value.field == "xacro_args" and "{'mas': '2.0'}" in message
     assert "declares or uses ('mass')" in message and "the expansion then failed" in message
+    assert "did you mean 'mass' for 'mas'?" in message
 
 
 def test_unknown_argument_is_refused(tmp_path):
     with pytest.raises(InputError, match=r"xacro_args: expected arguments that .* \('link_length'"):
         Robot.load(ARM_XACRO, xacro_args={"n_link": "5"})
+    with pytest.raises(InputError, match=r"did you mean 'n_links' for 'n_link'\?"):
+        Robot.load(ARM_XACRO, xacro_args={"n_link": "5"})
+    with pytest.raises(InputError) as caught:
+        Robot.load(ARM_XACRO, xacro_args={"colour": "5"})
+    assert "did you mean" not in str(caught.value)  # nothing close
 
 
 @pytest.mark.parametrize("args", [{"n_links": 5}, {"n_links": ["5"]}, "n_links:=5"])

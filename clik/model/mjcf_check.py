@@ -1,0 +1,417 @@
+"""Strict checks on an MJCF (MuJoCo) model before Pinocchio reads it, and its expansion.
+
+Pinocchio's MJCF reader (``pin.buildModelFromMJCF``) reads one file: it does not
+follow ``<include>``, reads only the first ``<compiler>``, ``<default>``, ``<asset>``,
+``<worldbody>`` and ``<keyframe>`` of the file, only the first ``<body>`` of the
+world, and reads mesh files through ``<compiler meshdir=... assetdir=...>``.
+:func:`check_mjcf` reads the model the way MuJoCo does and hands Pinocchio one
+self-contained document (:class:`MjcfDocument`):
+
+- every file is parsed by :func:`clik.model.urdf_check.parse_xml` (no entities,
+  no external DTD, no XInclude, the byte, element and attribute budgets);
+- ``<include file=...>`` elements are replaced by the children of the included
+  file's ``<mujoco>``, recursively, paths relative to the main file's folder (as
+  MuJoCo reads them), at most :data:`MAX_INCLUDES` files, :data:`MAX_INCLUDE_DEPTH`
+  deep, each file once;
+- the sections Pinocchio reads once are merged (later ``<compiler>`` attributes
+  override earlier ones, other sections' children are appended);
+- mesh and texture files are located as MuJoCo does (``meshdir``, ``texturedir``,
+  ``assetdir``, ``strippath``), checked (:func:`clik.model.mesh_check.check_mesh_file`
+  for meshes: regular file, format, size, counts, an OBJ's ``mtllib`` files) and
+  written into the document as absolute paths;
+- every file read (the includes, meshes, textures, an OBJ's material files) must
+  resolve, symlinks followed, inside the main file's folder;
+- numbers of bodies, joints, geoms, sites, inertials, meshes and keys are finite
+  and in range, joint ranges ``lower <= upper``, a joint ``ref`` is 0
+  (:mod:`clik.model.mjcf_numbers`), and each primitive geom gets the sizes its shape
+  needs (:mod:`clik.model.mjcf_geoms`); an upper-case (extrinsic) ``eulerseq``, which
+  Pinocchio reads as intrinsic, is refused;
+- elements Pinocchio would skip while they change the robot (``<frame>``,
+  ``<replicate>``, ``<attach>``, ``<composite>``, ``<flexcomp>``, height fields, ball
+  joints, a second body in the world) are refused; a free joint of the root body
+  is removed (the base is welded where the file places it) with a
+  :class:`FreeJointWeldedWarning`.
+
+Each problem raises :class:`~clik.errors.RobotLoadError` naming the file (the included
+one, when it is there) and the line.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lxml import etree
+
+from clik.errors import RobotLoadError, shown_path, user_stacklevel
+from clik.model.mesh_check import (
+    MAX_MESH_BYTES,
+    MeshRefused,
+    check_mesh_file,
+    regular_file_problem,
+)
+from clik.model.mjcf_geoms import check_geom_sizes
+from clik.model.mjcf_numbers import check_numbers, unit_axis_angles
+from clik.model.urdf_check import (
+    MAX_ELEMENTS,
+    MAX_LINKS,
+    MAX_MOVABLE_JOINTS,
+    parse_xml,
+)
+from clik.model.urdf_numbers import SHOWN_NAME, Fail, shown
+
+MAX_INCLUDES = 100
+"""Most files an MJCF model may include (``<include>``, all levels)."""
+
+MAX_INCLUDE_DEPTH = 8
+"""Most nested levels of ``<include>`` (a file including one that includes ...)."""
+
+MAX_BODIES = MAX_LINKS
+"""Most bodies (and most geoms) in an MJCF model, as many as a URDF's links."""
+
+FREE_JOINT_VALUES = 7
+"""Values of a free joint in a MuJoCo ``qpos``: 3 for its position, 4 for its quaternion."""
+
+MERGED_SECTIONS = ("default", "asset", "worldbody", "keyframe")
+"""Top-level sections Pinocchio reads once: their copies are merged into the first."""
+
+REFUSED_ELEMENTS = {
+    "frame": "Pinocchio's MJCF reader skips <frame>: the bodies inside would be misplaced",
+    "replicate": "Pinocchio's MJCF reader skips <replicate>: the copies would be missing",
+    "attach": "Pinocchio's MJCF reader skips <attach>: the attached model would be missing",
+    "composite": "Pinocchio's MJCF reader does not read <composite> bodies",
+    "flexcomp": "Pinocchio's MJCF reader does not read <flexcomp> bodies",
+    "hfield": "height fields (<hfield>) are not read by Pinocchio's MJCF reader",
+}
+"""Elements refused, with why: Pinocchio would silently read a different robot."""
+
+CHECKED_FILES = ("include", "mesh", "texture")
+"""Elements whose file attributes clik checks; a file attribute elsewhere is refused."""
+
+TEXTURE_FILES = ("file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback")
+"""A ``<texture>``'s file attributes (one image, or a cube's six)."""
+
+_LEADING = ("compiler", "default", "asset")  # Pinocchio reads sections in document order
+_SOURCE = "clik-source"  # attribute naming an element's file while the document is merged
+
+
+class FreeJointWeldedWarning(UserWarning):
+    """The root body's free joint was removed: the body is welded where the file places it."""
+
+
+@dataclass
+class MjcfDocument:
+    """An MJCF model as clik hands it to Pinocchio: one checked, self-contained document.
+
+    Attributes:
+        path: The main model file.
+        text: The document: includes expanded, sections merged, mesh and texture files
+            as absolute paths (resolved), ``meshdir``/``texturedir``/``assetdir``/
+            ``strippath`` removed.
+        files: Every file read, resolved: the main file, the includes, the meshes,
+            the textures.
+        degrees: The file's angles are in degrees (``<compiler angle>``, MuJoCo's
+            default).
+        welded: Name of the root body's free joint removed (welded), or None.
+    """
+
+    path: Path
+    text: str
+    files: list[Path] = field(default_factory=list)
+    degrees: bool = True
+    welded: str | None = None
+
+
+def is_mjcf(path: str | Path) -> bool:
+    """True for an existing file, not ending ``.urdf`` or ``.xacro``, whose root is ``<mujoco>``.
+
+    The file is parsed strictly (:func:`~clik.model.urdf_check.parse_xml`); one that
+    cannot be parsed is not called MJCF here (the URDF checks then report it).
+    """
+    path = Path(path)
+    if path.suffix.lower() in (".urdf", ".xacro") or regular_file_problem(path) is not None:
+        return False
+    try:
+        return parse_xml(path).getroot().tag == "mujoco"
+    except RobotLoadError:
+        return False
+
+
+def check_mjcf(path: str | Path) -> MjcfDocument:
+    """Check an MJCF model and every file it reads; the document Pinocchio may read.
+
+    Args:
+        path: The main model file (root element ``<mujoco>``).
+
+    Returns:
+        The checked, self-contained document.
+
+    Raises:
+        RobotLoadError: The first problem found, naming its file and line.
+
+    Warns:
+        FreeJointWeldedWarning: The root body has a free joint; it was removed.
+    """
+    path = Path(path)
+    folder = path.parent.absolute()
+    expansion = _Expansion(path, folder)
+    root = expansion.root
+    _merge_sections(root)
+    fail = _failing(path)
+    if root.get("model") is None:
+        root.set("model", path.stem)  # MuJoCo's default; Pinocchio requires one
+    compiler = root.find("compiler")
+    compiler = compiler if compiler is not None else etree.SubElement(root, "compiler")
+    degrees = compiler.get("angle", "degree") != "radian"
+    if compiler.get("autolimits") == "false":
+        raise fail(
+            '<compiler autolimits="false"> is refused: Pinocchio\'s MJCF reader then needs '
+            "limited=... on every joint and misreads joints without it",
+            compiler,
+        )
+    if any(letter.isupper() for letter in compiler.get("eulerseq", "")):
+        raise fail(
+            f"<compiler eulerseq={compiler.get('eulerseq')!r}> is refused: Pinocchio's MJCF "
+            "reader reads extrinsic (upper-case) axes as intrinsic ones",
+            compiler,
+        )
+    unit_axis_angles(root)
+    files = [path.resolve(), *expansion.included]
+    files += _locate_assets(root, compiler, folder, fail)
+    for attribute in ("meshdir", "texturedir", "assetdir", "strippath"):
+        compiler.attrib.pop(attribute, None)
+    welded = _check_world(root, path, fail)
+    check_geom_sizes(root, fail)
+    for element in root.iter():
+        element.attrib.pop(_SOURCE, None)
+    text = etree.tostring(root, encoding="unicode")
+    return MjcfDocument(path, text, files, degrees, welded)
+
+
+def _failing(path: Path) -> Fail:
+    """A ``fail(problem, element)`` naming the element's own file (an included one) and line."""
+
+    def fail(problem: str, element: etree._Element | None = None) -> RobotLoadError:
+        if element is None:
+            return RobotLoadError(path, problem)
+        source = _source_of(element) or path
+        return RobotLoadError(source, problem, line=element.sourceline)
+
+    return fail
+
+
+def _source_of(element: etree._Element) -> str | None:
+    """The file an element came from (set on each element while includes are expanded)."""
+    return element.get(_SOURCE)
+
+
+class _Expansion:
+    """The main file with its ``<include>`` elements replaced, each file checked on the way."""
+
+    def __init__(self, path: Path, folder: Path) -> None:
+        self.folder = folder
+        self.included: list[Path] = []
+        self.seen = {path.resolve()}
+        self.elements = 0
+        self.root = self._read(path, path, depth=0)
+
+    def _read(self, path: Path, shown_as: Path, depth: int) -> etree._Element:
+        root = parse_xml(path).getroot()
+        fail = _failing(shown_as)
+        if root.tag != "mujoco":
+            raise fail(f"the root element is <{shown(str(root.tag))}>, expected <mujoco>", root)
+        self.elements += sum(1 for _ in root.iter())
+        if self.elements > MAX_ELEMENTS:
+            raise fail(
+                f"the model and its includes have more than {MAX_ELEMENTS} elements "
+                "(clik.model.urdf_check.MAX_ELEMENTS)"
+            )
+        for element in root.iter():
+            if isinstance(element.tag, str):
+                element.set(_SOURCE, str(shown_as))
+        _check_elements(root, fail)
+        for include in list(root.iter("include")):
+            self._expand(include, fail, depth)
+        return root
+
+    def _expand(self, include: etree._Element, fail: Fail, depth: int) -> None:
+        written = include.get("file")
+        if not written:
+            raise fail("an <include> has no file", include)
+        if depth + 1 > MAX_INCLUDE_DEPTH:
+            raise fail(
+                f"<include file={shown_path(written)}> is {depth + 1} levels deep, above the "
+                f"budget of {MAX_INCLUDE_DEPTH} (clik.model.mjcf_check.MAX_INCLUDE_DEPTH)",
+                include,
+            )
+        file = _inside(self.folder / written, self.folder, f"included file {shown_path(written)}")
+        if isinstance(file, str):
+            raise fail(file, include)
+        if file in self.seen:
+            raise fail(
+                f"included file {shown_path(written)} is included twice (or in a cycle)", include
+            )
+        self.seen.add(file)
+        self.included.append(file)
+        if len(self.included) > MAX_INCLUDES:
+            raise fail(
+                f"more than {MAX_INCLUDES} included files (clik.model.mjcf_check.MAX_INCLUDES)",
+                include,
+            )
+        child = self._read(self.folder / written, self.folder / written, depth + 1)
+        parent = include.getparent()
+        position = parent.index(include)
+        parent.remove(include)
+        for offset, element in enumerate(list(child)):
+            parent.insert(position + offset, element)
+
+
+def _inside(file: Path, folder: Path, what: str) -> Path | str:
+    """``file`` resolved, if it is a regular file inside ``folder``; else the problem."""
+    problem = regular_file_problem(file)
+    if problem is not None:
+        return f"{what} ({file}) {'not found' if problem == 'no such file' else problem}"
+    resolved = file.resolve()
+    if not resolved.is_relative_to(folder.resolve()):
+        return f"{what} resolves to {resolved}, which leaves the model's folder {folder}"
+    return resolved
+
+
+def _check_elements(root: etree._Element, fail: Fail) -> None:
+    """Refused elements, file attributes clik does not check, and every number, in one file."""
+    for element in root.iter():
+        if not isinstance(element.tag, str):
+            continue  # a comment or processing instruction
+        tag = element.tag
+        if tag in REFUSED_ELEMENTS:
+            raise fail(f"<{tag}> is refused: {REFUSED_ELEMENTS[tag]}", element)
+        if tag not in CHECKED_FILES and any(a.startswith("file") for a in element.attrib):
+            raise fail(
+                f"<{tag[:SHOWN_NAME]}> names a file, which clik does not read (files are read only "
+                f"through {', '.join(f'<{t}>' for t in CHECKED_FILES)})",
+                element,
+            )
+        check_numbers(element, fail)
+
+
+def _merge_sections(root: etree._Element) -> None:
+    """One ``<compiler>``, ``<default>``, ``<asset>``, ``<worldbody>``, ``<keyframe>`` each."""
+    compilers = root.findall("compiler")
+    for later in compilers[1:]:
+        for name, value in later.attrib.items():
+            if name != _SOURCE:
+                compilers[0].set(name, value)
+        root.remove(later)
+    for tag in MERGED_SECTIONS:
+        sections = root.findall(tag)
+        for later in sections[1:]:
+            sections[0].extend(list(later))
+            root.remove(later)
+    for position, tag in enumerate(_LEADING):  # read before the bodies, as MuJoCo does
+        section = root.find(tag)
+        if section is not None:
+            root.insert(position, section)
+
+
+def _locate_assets(
+    root: etree._Element, compiler: etree._Element, folder: Path, fail: Fail
+) -> list[Path]:
+    """Check every mesh and texture file; write its absolute path in the document."""
+    strip = compiler.get("strippath") == "true"
+    asset_dir = compiler.get("assetdir", "")
+    dirs = {
+        "mesh": compiler.get("meshdir", asset_dir),
+        "texture": compiler.get("texturedir", asset_dir),
+    }
+    files: list[Path] = []
+    for tag in ("mesh", "texture"):
+        for element in root.iter(tag):
+            for attribute in TEXTURE_FILES if tag == "texture" else ("file",):
+                written = element.get(attribute)
+                if written is None:
+                    continue
+                name = Path(written).name if strip else written
+                file = folder / dirs[tag] / name  # an absolute name or dir stays absolute
+                what = f"{tag} file {shown_path(written)}"
+                located = _inside(file, folder, what)
+                if isinstance(located, str):
+                    raise fail(located, element)
+                if tag == "mesh":
+                    _check_mesh(element, file, folder, what, fail)
+                elif os.stat(located).st_size > MAX_MESH_BYTES:
+                    raise fail(f"{what} is above {MAX_MESH_BYTES} bytes (MAX_MESH_BYTES)", element)
+                if tag == "mesh" and element.get("name") is None:
+                    element.set("name", Path(written).stem)  # MuJoCo's and Pinocchio's name
+                element.set(attribute, str(located))
+                files.append(located)
+    return files
+
+
+def _check_mesh(element: etree._Element, file: Path, folder: Path, what: str, fail: Fail) -> None:
+    """The cheap mesh checks, an OBJ's material files inside the folder."""
+    scale = [float(s) for s in element.get("scale", "1 1 1").split()]
+    try:
+        facts = check_mesh_file(file, scale, folder, what=what)
+        for side in facts.side_files:
+            located = _inside(facts.path.parent / side, folder, f"its material file {side!r}")
+            if isinstance(located, str) and "not found" not in located:
+                raise MeshRefused(f"{what}: {located}")
+    except MeshRefused as refused:
+        raise fail(str(refused), element) from None
+
+
+def _in_world(element: etree._Element) -> bool:
+    """True for an element under ``<worldbody>`` (not in a ``<default>``)."""
+    return any(parent.tag == "worldbody" for parent in element.iterancestors())
+
+
+def _check_world(root: etree._Element, path: Path, fail: Fail) -> str | None:
+    """One root body, budgets, and its free joint removed; the removed joint's name."""
+    world = root.find("worldbody")
+    bodies = [] if world is None else world.findall("body")
+    if not bodies:
+        raise fail("the model has no <body> in its <worldbody>: no robot to load", world)
+    if len(bodies) > 1:
+        names = ", ".join(shown(b.get("name", "(unnamed)")) for b in bodies[:10])
+        raise fail(
+            f"the <worldbody> holds {len(bodies)} bodies ({names}); Pinocchio's MJCF reader "
+            "reads only the first: keep one robot (one root body) per model",
+            bodies[1],
+        )
+    all_bodies = list(bodies[0].iter("body"))
+    geoms = [g for g in root.iter("geom") if _in_world(g)]
+    if max(len(all_bodies), len(geoms)) > MAX_BODIES:
+        found = f"{len(all_bodies)} bodies and {len(geoms)} geoms"
+        raise fail(f"the model has {found}, above the budget of {MAX_BODIES} (MAX_BODIES)")
+    joints = [j for j in bodies[0].iter("joint", "freejoint")]
+    free = [j for j in joints if j.tag == "freejoint" or j.get("type") == "free"]
+    welded = None
+    for joint in free:
+        if joint.getparent() is not bodies[0]:
+            raise fail("a free joint below the root body (MuJoCo allows none)", joint)
+        welded = joint.get("name") or f"{bodies[0].get('name', 'root')} (free joint)"
+        bodies[0].remove(joint)
+        joints.remove(joint)
+        for key in root.iter("key"):
+            values = key.get("qpos")
+            if values is not None:
+                key.set("qpos", " ".join(values.split()[FREE_JOINT_VALUES:]))
+    if welded is not None:
+        warnings.warn(
+            FreeJointWeldedWarning(
+                f"{path}: the root body's free joint {welded!r} was removed: the robot is "
+                "loaded with a fixed base, welded at the pose the file gives its root body"
+            ),
+            stacklevel=user_stacklevel(),
+        )
+    if not joints:
+        raise fail("the robot has no movable (hinge or slide) joint", bodies[0])
+    if len(joints) > MAX_MOVABLE_JOINTS:
+        raise fail(
+            f"the robot has {len(joints)} joints, above the budget of {MAX_MOVABLE_JOINTS} "
+            "(clik.model.urdf_check.MAX_MOVABLE_JOINTS)",
+            bodies[0],
+        )
+    return welded
