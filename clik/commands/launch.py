@@ -73,6 +73,16 @@ def _workspace_robots(folder: Path) -> int:
     print(f"{'package':{width}s} file")
     for item in found:
         print(f"{item.package:{width}s} {item.path}")
+    from clik.model.packages import PackageDirs
+
+    for name, same in sorted(PackageDirs([folder]).packages_under(folder).items()):
+        if len(same) > 1:  # colcon refuses the pair; so does Robot.load, when it is used
+            print(
+                f"\nnote: {len(same)} packages named {name!r} ("
+                + ", ".join(str(p.manifest) for p in same)
+                + "): a robot using it will not load from this folder; put a COLCON_IGNORE "
+                "file in the folder of the one not to use"
+            )
     print(f"\nload one with Robot.load(path, package_dirs=[{str(folder)!r}])")
     print(f'or in a scenario: [robot] source = "path", package_dirs = ["{folder}"]')
     return 0

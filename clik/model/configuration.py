@@ -81,7 +81,7 @@ def configuration(
         for joint, kind in zip(joints, kinds, strict=True):
             if kind == REVOLUTE:
                 q[joint.idx_q] *= scale
-        return base_rotations(model, q, field)
+        return unit_rotations(model, q, field)
     if angle_form and array.shape == (model.nv,):
         q = np.empty(model.nq)
         for joint, kind in zip(joints, kinds, strict=True):
@@ -99,20 +99,21 @@ def configuration(
     raise InputError(field, expected, got=shown(array))
 
 
-def base_rotations(model: pin.Model, q: np.ndarray, field: str) -> np.ndarray:
-    """``q`` with a base's rotation (planar (cos, sin), floating quaternion) normalised.
+def unit_rotations(model: pin.Model, q: np.ndarray, field: str) -> np.ndarray:
+    """``q`` with its rotations normalised, in place.
 
+    A continuous joint's or a planar base's (cos, sin), a floating base's quaternion.
     Pinocchio's integration and kinematics assume them unit; a norm within
     :data:`~clik.model.base.QUATERNION_TOLERANCE` of 1 (values written with a few
     digits) is normalised in place.
 
     Raises:
-        InputError: A base's rotation whose norm is further from 1 (names ``field``).
+        InputError: A rotation whose norm is further from 1 (names ``field``).
     """
     for joint in model.joints[1:]:
         kind = joint_kind(joint)
-        if kind == PLANAR:
-            i = joint.idx_q + 2
+        if kind in (PLANAR, CONTINUOUS):
+            i = joint.idx_q + (2 if kind == PLANAR else 0)
             q[i : i + 2] = normalised_rotation(q[i : i + 2], field, "(cos, sin) pair")
         elif kind == FREE_FLYER:
             i = joint.idx_q + 3

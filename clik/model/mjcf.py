@@ -19,8 +19,22 @@ the user's files directly. What clik takes from it:
 - **Reference configuration**: the ``<key name="home">`` of ``<keyframe>`` if
   there is one (clipped into the limits, warned), else Pinocchio's neutral
   configuration (all zeros) clipped into the limits.
-- **Base**: fixed; a root free joint is removed (see
-  :class:`~clik.model.mjcf_check.FreeJointWeldedWarning`).
+- **Base** (``Robot.load(..., base=...)``, :mod:`clik.model.base`): the root body's
+  free joint (``<freejoint/>``) is removed from the document, and so is its pose;
+  clik places the root body itself (:func:`place_root`):
+
+  - ``"fixed"``: welded at the pose the file gives the root body (MuJoCo's ``qpos0``),
+    the free joint warned (:class:`~clik.model.mjcf_root.FreeJointWeldedWarning`),
+    the keys' free-joint values dropped;
+  - ``"floating"``: Pinocchio's free-flyer root joint (named ``root_joint``) *is* the
+    root body's pose in the world, as MuJoCo's free joint: its reference is the
+    ``home`` key's 7 values (MuJoCo's ``x y z qw qx qy qz`` turned into Pinocchio's
+    ``x y z qx qy qz qw``), else the file's pose of the root body;
+  - ``"planar"``: a planar root joint carrying that pose's ``x``, ``y`` and yaw; its
+    height, roll and pitch stay fixed between the root joint and the root body.
+
+  Forward kinematics at the reference then equals MuJoCo's at the ``home`` key (or
+  ``qpos0``): ``tests/model/test_mjcf_bases.py``.
 """
 
 from __future__ import annotations
@@ -34,16 +48,22 @@ import numpy as np
 import pinocchio as pin
 
 from clik.errors import InputError, RobotLoadError, native_message
+from clik.model.base import (
+    BASE_JOINT,
+    FIXED,
+    FLOATING,
+    PLANAR,
+    planar_from_free_flyer,
+    root_joint,
+)
 from clik.model.joints import PRISMATIC, joint_kind
 from clik.model.loading import check_mesh_extents, clipped_reference
-from clik.model.mjcf_check import MjcfDocument, check_mjcf
-
-HOME_KEY = "home"
-"""Name of the ``<key>`` used as the reference configuration when the model has one."""
+from clik.model.mjcf_check import check_mjcf
+from clik.model.mjcf_root import FREE_JOINT_VALUES, HOME_KEY, MjcfDocument
 
 
 def load_mjcf(
-    path: Path, refused: Mapping[str, object] | None = None
+    path: Path, refused: Mapping[str, object] | None = None, base: str = FIXED
 ) -> tuple[pin.Model, pin.GeometryModel, np.ndarray, MjcfDocument]:
     """Check an MJCF model, then build its kinematic and collision models.
 
@@ -53,31 +73,33 @@ def load_mjcf(
     Args:
         path: The main model file.
         refused: ``Robot.load``'s options an MJCF model does not take, by name
-            (``xacro_args``, ``srdf``, a planar or floating ``base``): each must be
-            empty or false.
+            (``xacro_args``, ``srdf``): each must be empty or false.
+        base: ``"fixed"``, ``"planar"`` or ``"floating"`` (see the module's docstring).
 
     Returns:
-        The model (fixed base), its collision geometry, the reference configuration and
-        the checked document (kept by the robot to read its visual geometry).
+        The model (its root joint first, for a planar or floating base), its collision
+        geometry, the reference configuration and the checked document (kept by the
+        robot to read its visual geometry).
 
     Raises:
         InputError: An option in ``refused`` was given.
         RobotLoadError: The model or a file it reads is refused
-            (:func:`~clik.model.mjcf_check.check_mjcf`), Pinocchio cannot read it, or it
-            has a joint of more than one degree of freedom.
+            (:func:`~clik.model.mjcf_check.check_mjcf`), Pinocchio cannot read it, it
+            has a joint of more than one degree of freedom, or its ``home`` key does not
+            hold one value per joint.
 
     Warns:
-        FreeJointWeldedWarning: The root body's free joint was removed.
+        FreeJointWeldedWarning: With a fixed base, the root body's free joint was removed.
         ReferenceClippedWarning: The ``home`` key lies outside the joint ranges.
     """
     for option, value in (refused or {}).items():
         if value:
             raise InputError(option, f"no {option} for an MJCF model ({path})", value)
-    document = check_mjcf(path)
+    document = check_mjcf(path, base)
     model, collision_model = _read(document, pin.COLLISION)
     _check_joints(model, document)
     check_mesh_extents(path, collision_model)
-    return model, collision_model, reference_configuration(model), document
+    return model, collision_model, reference_configuration(model, document), document
 
 
 def mjcf_visual_model(
@@ -103,12 +125,124 @@ def mjcf_visual_model(
     return visual
 
 
-def reference_configuration(model: pin.Model) -> np.ndarray:
-    """The ``home`` key if the model has one, else neutral; clipped into the limits."""
-    if HOME_KEY in model.referenceConfigurations:
-        q = np.array(model.referenceConfigurations[HOME_KEY], dtype=float)
-        return clipped_reference(model, q, HOME_KEY)
-    return np.clip(pin.neutral(model), model.lowerPositionLimit, model.upperPositionLimit)
+def reference_configuration(model: pin.Model, document: MjcfDocument) -> np.ndarray:
+    """The ``home`` key if the model has one, else neutral; clipped into the limits.
+
+    A planar or floating base starts at :func:`base_pose` (the ``home`` key's free joint,
+    else the file's pose of the root body): floating, Pinocchio's ``x, y, z, q_x, q_y,
+    q_z, q_w``; planar, ``x, y, cos, sin`` of its yaw.
+
+    Raises:
+        RobotLoadError: The ``home`` key does not give one value per joint.
+    """
+    if document.base == FIXED:
+        if HOME_KEY in model.referenceConfigurations:
+            q = np.array(model.referenceConfigurations[HOME_KEY], dtype=float)
+            return clipped_reference(model, q, HOME_KEY)
+        return np.clip(pin.neutral(model), model.lowerPositionLimit, model.upperPositionLimit)
+    n_base = model.joints[1].nq
+    pose = np.asarray(pin.SE3ToXYZQUAT(base_pose(document)), dtype=float)
+    q = pin.neutral(model)
+    q[:n_base] = planar_from_free_flyer(pose) if document.base == PLANAR else pose
+    if document.home_joints is None:
+        low, high = model.lowerPositionLimit[n_base:], model.upperPositionLimit[n_base:]
+        q[n_base:] = np.clip(q[n_base:], low, high)
+        return q
+    if len(document.home_joints) != model.nq - n_base:
+        after = f" after the free joint's {FREE_JOINT_VALUES}" if document.welded else ""
+        raise RobotLoadError(
+            document.path,
+            f"the key {HOME_KEY!r} has {len(document.home_joints)} qpos values for the joints"
+            f"{after}: expected {model.nq - n_base}, one per joint",
+        )
+    q[n_base:] = document.home_joints
+    return clipped_reference(model, q, HOME_KEY)
+
+
+def root_placement(document: MjcfDocument) -> pin.SE3:
+    """The pose the file gives its root body in the world (identity when it gives none).
+
+    Read by Pinocchio from :attr:`MjcfDocument.root_probe
+    <clik.model.mjcf_root.MjcfDocument.root_probe>` (the placement of a hinge in a body
+    with the root body's pose attributes), so every orientation form (``quat``,
+    ``euler`` with the file's ``eulerseq``, ``axisangle``, ``xyaxes``, ``zaxis``) and the
+    file's angle unit are read as for every other body.
+
+    Raises:
+        RobotLoadError: Pinocchio cannot read it.
+    """
+    if document.root_probe is None:
+        return pin.SE3.Identity()
+    with tempfile.TemporaryDirectory(prefix="clik-mjcf-") as folder:
+        file = Path(folder, "probe.xml")
+        file.write_text(document.root_probe, encoding="utf-8")
+        try:
+            probe = pin.buildModelFromMJCF(str(file))
+        except (ValueError, RuntimeError, KeyError, IndexError) as error:
+            problem = f"Pinocchio cannot read the root body's pose: {native_message(error)}"
+            raise RobotLoadError(document.path, problem) from None
+    placement = pin.SE3(probe.jointPlacements[1])
+    if not all(math.isfinite(v) for v in np.ravel(placement.homogeneous)):
+        raise RobotLoadError(document.path, "the root body's pose is not finite")
+    return placement
+
+
+def base_pose(document: MjcfDocument) -> pin.SE3:
+    """The root body's pose in the world at the reference configuration.
+
+    The ``home`` key's free-joint values when there are some (MuJoCo's ``x y z qw qx qy
+    qz``, the quaternion normalised as MuJoCo does), else :func:`root_placement` (MuJoCo's
+    ``qpos0`` of a free joint is the body's pose in the file).
+
+    Raises:
+        RobotLoadError: The key's quaternion is zero.
+    """
+    if document.home_base is None:
+        return root_placement(document)
+    x, y, z, w, qx, qy, qz = document.home_base
+    norm = math.sqrt(w * w + qx * qx + qy * qy + qz * qz)
+    if not norm > 0.0:
+        raise RobotLoadError(
+            document.path, f"the key {HOME_KEY!r} gives the free joint a zero quaternion"
+        )
+    rotation = pin.Quaternion(w / norm, qx / norm, qy / norm, qz / norm).matrix()
+    return pin.SE3(rotation, np.array([x, y, z], dtype=float))
+
+
+def place_root(model: pin.Model, document: MjcfDocument) -> None:
+    """Place the root body, whose pose the document no longer holds, in ``model``.
+
+    Fixed base: the root body's frames and child joints (those on the world, joint 0)
+    move to :func:`root_placement`. Floating: nothing (the free-flyer's configuration is
+    the root body's pose). Planar: the part of :func:`base_pose` the planar joint does
+    not carry (its height, roll and pitch: ``offset = planar(x, y, yaw)^-1 pose``) goes
+    between the root joint and the root body's frames and child joints.
+    """
+    if document.base == FLOATING:
+        return
+    if document.base == FIXED:
+        _attach(model, 0, root_placement(document))
+        return
+    pose = base_pose(document)
+    x, y, cos, sin = planar_from_free_flyer(np.asarray(pin.SE3ToXYZQUAT(pose)))
+    yaw = np.array([[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]])
+    _attach(model, 1, pin.SE3(yaw, np.array([x, y, 0.0])).actInv(pose))
+
+
+def _attach(model: pin.Model, joint: int, placement: pin.SE3) -> None:
+    """Move what hangs on ``joint`` (child joints, frames, inertia) by ``placement``."""
+    if placement.isIdentity(1e-15):
+        return
+    for i in range(1, model.njoints):
+        if model.parents[i] == joint:
+            model.jointPlacements[i] = placement * model.jointPlacements[i]
+    for index, frame in enumerate(model.frames):
+        joint_frame = frame.type == pin.JOINT and frame.name == model.names[joint]
+        own = index == 0 if joint == 0 else joint_frame  # the world's, the root joint's frame
+        if frame.parentJoint == joint and not own:
+            frame.placement = placement * frame.placement
+    if joint > 0:
+        model.inertias[joint] = placement.act(model.inertias[joint])
 
 
 def _read(
@@ -121,8 +255,14 @@ def _read(
         file.write_text(document.text, encoding="utf-8")
         try:
             if model is None:
-                model = pin.buildModelFromMJCF(str(file))
+                root = root_joint(document.base)
+                model = (
+                    pin.buildModelFromMJCF(str(file))
+                    if root is None
+                    else pin.buildModelFromMJCFAndRootJoint(str(file), root, BASE_JOINT)
+                )
                 _metres(model, document)
+                place_root(model, document)
             geometry = pin.buildGeomFromMJCF(model, str(file), kind)
         except (ValueError, RuntimeError, KeyError, IndexError) as error:
             problem = f"Pinocchio cannot read the {what}: {native_message(error)}"
@@ -152,8 +292,9 @@ def _without_planes(geometry: pin.GeometryModel) -> pin.GeometryModel:
 
 
 def _check_joints(model: pin.Model, document: MjcfDocument) -> None:
-    """Every joint one degree of freedom, finite placements, ``lower <= upper``."""
-    for name, joint in zip(model.names[1:], model.joints[1:], strict=True):
+    """Every joint one degree of freedom (but the base's), finite placements, ``lower <= upper``."""
+    first = 1 if document.base == FIXED else 2  # a planar or floating base's root joint
+    for name, joint in zip(model.names[first:], model.joints[first:], strict=True):
         if joint.nq != 1 or joint.nv != 1:
             raise RobotLoadError(
                 document.path,

@@ -28,9 +28,19 @@ self-contained document (:class:`MjcfDocument`):
   Pinocchio reads as intrinsic, is refused;
 - elements Pinocchio would skip while they change the robot (``<frame>``,
   ``<replicate>``, ``<attach>``, ``<composite>``, ``<flexcomp>``, height fields, ball
-  joints, a second body in the world) are refused; a free joint of the root body
-  is removed (the base is welded where the file places it) with a
-  :class:`FreeJointWeldedWarning`.
+  joints, a second body in the world) are refused;
+- the root body's free joint is removed (its 7 ``qpos`` values leave every key:
+  :attr:`MjcfDocument.home_base` keeps the ``home`` key's), and so is the root body's
+  pose (``pos``, ``quat``, ``euler``, ...: Pinocchio 4.1 drops it when the body has no
+  joint of its own, and puts it before a root joint): :mod:`clik.model.mjcf` places
+  the root body itself, at :attr:`MjcfDocument.root_probe`'s pose. With a fixed base
+  a removed free joint is warned (:class:`FreeJointWeldedWarning`); with a planar or
+  floating base the ``<keyframe>`` leaves the document too (Pinocchio would read a
+  key against the model with its root joint) and clik reads the ``home`` key
+  (:attr:`MjcfDocument.home_joints`). Pinocchio 4.1's own reading of a free joint is
+  not used: it places the joint at ``pos - R pos`` instead of the world's origin (its
+  forward kinematics then differ from MuJoCo's by that offset) and ignores a root joint
+  given with it.
 
 Each problem raises :class:`~clik.errors.RobotLoadError` naming the file (the included
 one, when it is there) and the line.
@@ -39,13 +49,12 @@ one, when it is there) and the line.
 from __future__ import annotations
 
 import os
-import warnings
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from lxml import etree
 
-from clik.errors import RobotLoadError, shown_path, user_stacklevel
+from clik.errors import RobotLoadError, shown_path
+from clik.model.base import FIXED, check_base
 from clik.model.mesh_check import (
     MAX_MESH_BYTES,
     MeshRefused,
@@ -54,10 +63,10 @@ from clik.model.mesh_check import (
 )
 from clik.model.mjcf_geoms import check_geom_sizes
 from clik.model.mjcf_numbers import check_numbers, unit_axis_angles
+from clik.model.mjcf_root import SOURCE_ATTRIBUTE as _SOURCE
+from clik.model.mjcf_root import MjcfDocument, check_world
 from clik.model.urdf_check import (
     MAX_ELEMENTS,
-    MAX_LINKS,
-    MAX_MOVABLE_JOINTS,
     parse_xml,
 )
 from clik.model.urdf_numbers import SHOWN_NAME, Fail, shown
@@ -67,12 +76,6 @@ MAX_INCLUDES = 100
 
 MAX_INCLUDE_DEPTH = 8
 """Most nested levels of ``<include>`` (a file including one that includes ...)."""
-
-MAX_BODIES = MAX_LINKS
-"""Most bodies (and most geoms) in an MJCF model, as many as a URDF's links."""
-
-FREE_JOINT_VALUES = 7
-"""Values of a free joint in a MuJoCo ``qpos``: 3 for its position, 4 for its quaternion."""
 
 MERGED_SECTIONS = ("default", "asset", "worldbody", "keyframe")
 """Top-level sections Pinocchio reads once: their copies are merged into the first."""
@@ -94,34 +97,6 @@ TEXTURE_FILES = ("file", "fileright", "fileleft", "fileup", "filedown", "filefro
 """A ``<texture>``'s file attributes (one image, or a cube's six)."""
 
 _LEADING = ("compiler", "default", "asset")  # Pinocchio reads sections in document order
-_SOURCE = "clik-source"  # attribute naming an element's file while the document is merged
-
-
-class FreeJointWeldedWarning(UserWarning):
-    """The root body's free joint was removed: the body is welded where the file places it."""
-
-
-@dataclass
-class MjcfDocument:
-    """An MJCF model as clik hands it to Pinocchio: one checked, self-contained document.
-
-    Attributes:
-        path: The main model file.
-        text: The document: includes expanded, sections merged, mesh and texture files
-            as absolute paths (resolved), ``meshdir``/``texturedir``/``assetdir``/
-            ``strippath`` removed.
-        files: Every file read, resolved: the main file, the includes, the meshes,
-            the textures.
-        degrees: The file's angles are in degrees (``<compiler angle>``, MuJoCo's
-            default).
-        welded: Name of the root body's free joint removed (welded), or None.
-    """
-
-    path: Path
-    text: str
-    files: list[Path] = field(default_factory=list)
-    degrees: bool = True
-    welded: str | None = None
 
 
 def is_mjcf(path: str | Path) -> bool:
@@ -139,11 +114,14 @@ def is_mjcf(path: str | Path) -> bool:
         return False
 
 
-def check_mjcf(path: str | Path) -> MjcfDocument:
+def check_mjcf(path: str | Path, base: str = FIXED) -> MjcfDocument:
     """Check an MJCF model and every file it reads; the document Pinocchio may read.
 
     Args:
         path: The main model file (root element ``<mujoco>``).
+        base: The base the robot is loaded with (:data:`clik.model.base.BASES`): a fixed
+            base warns about a removed free joint; a planar or floating one has the
+            ``<keyframe>`` removed from the document (read into the document's fields).
 
     Returns:
         The checked, self-contained document.
@@ -152,8 +130,10 @@ def check_mjcf(path: str | Path) -> MjcfDocument:
         RobotLoadError: The first problem found, naming its file and line.
 
     Warns:
-        FreeJointWeldedWarning: The root body has a free joint; it was removed.
+        FreeJointWeldedWarning: With a fixed base, the root body has a free joint; it was
+            removed.
     """
+    check_base(base)
     path = Path(path)
     folder = path.parent.absolute()
     expansion = _Expansion(path, folder)
@@ -182,12 +162,13 @@ def check_mjcf(path: str | Path) -> MjcfDocument:
     files += _locate_assets(root, compiler, folder, fail)
     for attribute in ("meshdir", "texturedir", "assetdir", "strippath"):
         compiler.attrib.pop(attribute, None)
-    welded = _check_world(root, path, fail)
+    document = MjcfDocument(path, "", files, degrees, base=base)
+    check_world(root, path, fail, document)
     check_geom_sizes(root, fail)
     for element in root.iter():
         element.attrib.pop(_SOURCE, None)
-    text = etree.tostring(root, encoding="unicode")
-    return MjcfDocument(path, text, files, degrees, welded)
+    document.text = etree.tostring(root, encoding="unicode")
+    return document
 
 
 def _failing(path: Path) -> Fail:
@@ -360,58 +341,3 @@ def _check_mesh(element: etree._Element, file: Path, folder: Path, what: str, fa
                 raise MeshRefused(f"{what}: {located}")
     except MeshRefused as refused:
         raise fail(str(refused), element) from None
-
-
-def _in_world(element: etree._Element) -> bool:
-    """True for an element under ``<worldbody>`` (not in a ``<default>``)."""
-    return any(parent.tag == "worldbody" for parent in element.iterancestors())
-
-
-def _check_world(root: etree._Element, path: Path, fail: Fail) -> str | None:
-    """One root body, budgets, and its free joint removed; the removed joint's name."""
-    world = root.find("worldbody")
-    bodies = [] if world is None else world.findall("body")
-    if not bodies:
-        raise fail("the model has no <body> in its <worldbody>: no robot to load", world)
-    if len(bodies) > 1:
-        names = ", ".join(shown(b.get("name", "(unnamed)")) for b in bodies[:10])
-        raise fail(
-            f"the <worldbody> holds {len(bodies)} bodies ({names}); Pinocchio's MJCF reader "
-            "reads only the first: keep one robot (one root body) per model",
-            bodies[1],
-        )
-    all_bodies = list(bodies[0].iter("body"))
-    geoms = [g for g in root.iter("geom") if _in_world(g)]
-    if max(len(all_bodies), len(geoms)) > MAX_BODIES:
-        found = f"{len(all_bodies)} bodies and {len(geoms)} geoms"
-        raise fail(f"the model has {found}, above the budget of {MAX_BODIES} (MAX_BODIES)")
-    joints = [j for j in bodies[0].iter("joint", "freejoint")]
-    free = [j for j in joints if j.tag == "freejoint" or j.get("type") == "free"]
-    welded = None
-    for joint in free:
-        if joint.getparent() is not bodies[0]:
-            raise fail("a free joint below the root body (MuJoCo allows none)", joint)
-        welded = joint.get("name") or f"{bodies[0].get('name', 'root')} (free joint)"
-        bodies[0].remove(joint)
-        joints.remove(joint)
-        for key in root.iter("key"):
-            values = key.get("qpos")
-            if values is not None:
-                key.set("qpos", " ".join(values.split()[FREE_JOINT_VALUES:]))
-    if welded is not None:
-        warnings.warn(
-            FreeJointWeldedWarning(
-                f"{path}: the root body's free joint {welded!r} was removed: the robot is "
-                "loaded with a fixed base, welded at the pose the file gives its root body"
-            ),
-            stacklevel=user_stacklevel(),
-        )
-    if not joints:
-        raise fail("the robot has no movable (hinge or slide) joint", bodies[0])
-    if len(joints) > MAX_MOVABLE_JOINTS:
-        raise fail(
-            f"the robot has {len(joints)} joints, above the budget of {MAX_MOVABLE_JOINTS} "
-            "(clik.model.urdf_check.MAX_MOVABLE_JOINTS)",
-            bodies[0],
-        )
-    return welded

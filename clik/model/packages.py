@@ -11,7 +11,9 @@ of ``package_dirs`` (:class:`PackageDirs`), in order:
    ``example-robot-data`` holds the package ``example_robot_data``, and its URDFs
    say ``package://example-robot-data/...``); unless it holds no ``package.xml``
    and a folder directly inside it is the package ``pkg`` (a repository named
-   after the package it holds);
+   after the package it holds); when its ``package.xml`` names ``pkg``, another
+   package ``pkg`` below ``dir`` is an error naming both (as step 2 says), so that a
+   namesake directly in ``dir`` never hides a duplicate;
 2. else the packages under ``dir``, searched recursively as colcon and rospack do
    (:meth:`PackageDirs.packages_under`): a folder holding ``COLCON_IGNORE``,
    ``AMENT_IGNORE`` or ``CATKIN_IGNORE`` is skipped with everything below it; hidden
@@ -25,6 +27,8 @@ Then, when set, each folder of ``ROS_PACKAGE_PATH`` (colon-separated, searched l
 (``<prefix>/share/pkg/package.xml``). The first folder holding the package wins
 (an overlay shadows its underlay, as in ROS).
 
+Folders that cannot be looked into are skipped, and the filesystem root is never
+searched (a string given as ``package_dirs`` names it: one folder per character).
 Every ``package.xml`` read is parsed strictly (:func:`clik.model.urdf_check.parse_xml`).
 The search is bounded: at most :data:`MAX_PACKAGE_DEPTH` folder levels below a
 searched folder and :data:`MAX_FOLDERS_VISITED` folders per searched folder; past
@@ -101,10 +105,17 @@ def package_name(manifest: Path) -> str:
 
 
 def is_skipped(folder: Path) -> bool:
-    """Whether the search skips ``folder``: hidden, or holding an ignore marker."""
-    return folder.name.startswith(".") or any(
-        (folder / marker).exists() for marker in IGNORE_MARKERS
-    )
+    """Whether the search skips ``folder``: hidden, holding an ignore marker, or unreadable.
+
+    A folder the user may not look into (``/proc/1/fdinfo``) is skipped, as colcon
+    skips it, rather than stopping the search.
+    """
+    try:
+        return folder.name.startswith(".") or any(
+            (folder / marker).exists() for marker in IGNORE_MARKERS
+        )
+    except OSError:  # no permission to look into it
+        return True
 
 
 class PackageDirs(Sequence[Path]):
@@ -128,6 +139,7 @@ class PackageDirs(Sequence[Path]):
         self.ament_prefixes = _path_list(env.get("AMENT_PREFIX_PATH", ""))
         self._searched: dict[Path, dict[str, list[Package]]] = {}
         self._found: dict[str, Package | None] = {}
+        self._unsearchable: set[Path] = set()
 
     @overload
     def __getitem__(self, index: int) -> Path: ...
@@ -143,8 +155,14 @@ class PackageDirs(Sequence[Path]):
         return f"PackageDirs({[str(f) for f in self.folders]})"
 
     def searched(self) -> str:
-        """The folders searched, in words (for messages)."""
-        parts = [", ".join(map(str, self.folders)) or "none given"]
+        """The folders searched, in words (for messages).
+
+        A folder that does not exist says so (a misspelt ``package_dirs``); folders of one
+        character each are a string given where a list was expected.
+        """
+        parts = [", ".join(map(_folder_in_words, self.folders)) or "none given"]
+        if len(self.folders) > 1 and all(len(str(f)) == 1 for f in self.folders):
+            parts[0] += " (a single string given as package_dirs: pass a list, ['ws/src'])"
         if self.ros_folders:
             parts.append("ROS_PACKAGE_PATH: " + ", ".join(map(str, self.ros_folders)))
         if self.ament_prefixes:
@@ -172,23 +190,43 @@ class PackageDirs(Sequence[Path]):
         for folder in [*self.folders, *self.ros_folders]:
             direct = _direct_package(folder, name)
             if direct is not None:
+                self._check_unshadowed(folder, direct)
                 return direct
             found = self.packages_under(folder).get(name, [])
             if len(found) > 1:
-                raise InputError(
-                    "package_dirs",
-                    f"one package named {name!r} under {folder}; found "
-                    f"{len(found)}: "
-                    + ", ".join(str(p.manifest) for p in found)
-                    + " (put a COLCON_IGNORE file in the folder of the one not to use)",
-                )
+                raise _duplicate_error(name, folder, found)
             if found:
                 return found[0]
         for prefix in self.ament_prefixes:
             manifest = prefix / "share" / name / MANIFEST
-            if manifest.is_file() and package_name(manifest) == name:
+            if _is_file(manifest) and package_name(manifest) == name:
                 return Package(name, manifest.parent.resolve(), manifest)
         return None
+
+    def _check_unshadowed(self, folder: Path, direct: Package) -> None:
+        """Refuse a package found directly in ``folder`` when another of its name lies below.
+
+        Only for a folder whose ``package.xml`` gives the name looked up (a ROS package
+        in a workspace, e.g. ``src/franka_description`` next to
+        ``src/franka_ros/franka_description``): ROS refuses the pair, and taking the
+        one directly in ``folder`` silently may read another version of the robot.
+        Best effort: a folder that cannot be searched (past the budgets, a bad
+        ``package.xml`` elsewhere) keeps the package found directly, as before.
+
+        Raises:
+            InputError: Another package of that name under ``folder`` (both named).
+        """
+        if direct.manifest is None or folder.absolute() in self._unsearchable:
+            return
+        try:
+            if package_name(direct.manifest) != direct.name:
+                return  # a folder named otherwise than its package (example-robot-data)
+            found = self.packages_under(folder).get(direct.name, [])
+        except (InputError, RobotLoadError):
+            self._unsearchable.add(folder.absolute())
+            return
+        if any(package.folder != direct.folder for package in found):
+            raise _duplicate_error(direct.name, folder, found)
 
     def package_folder(self, name: str) -> Path | None:
         """The folder of the package ``name`` (symlinks resolved), or None; see :meth:`find`."""
@@ -205,6 +243,14 @@ class PackageDirs(Sequence[Path]):
         """
         key = folder.absolute()
         if key not in self._searched:
+            if key == Path(key.anchor):
+                raise InputError(
+                    "package_dirs",
+                    "folders holding ROS packages (a workspace's src), not the filesystem "
+                    "root; a single string given as package_dirs is read as one folder per "
+                    "character: pass a list, package_dirs=['ws/src']",
+                    str(folder),
+                )
             found: dict[str, list[Package]] = {}
             for package in _search(folder):
                 found.setdefault(package.name, []).append(package)
@@ -227,6 +273,24 @@ def package_dirs_of(package_dirs: Sequence[str | Path]) -> PackageDirs:
     return package_dirs if isinstance(package_dirs, PackageDirs) else PackageDirs(package_dirs)
 
 
+def _duplicate_error(name: str, folder: Path, found: Sequence[Package]) -> InputError:
+    """Two packages or more named ``name`` under ``folder``: each ``package.xml`` named."""
+    return InputError(
+        "package_dirs",
+        f"one package named {name!r} under {folder}; found {len(found)}: "
+        + ", ".join(str(p.manifest) for p in found)
+        + " (put a COLCON_IGNORE file in the folder of the one not to use)",
+    )
+
+
+def _folder_in_words(folder: Path) -> str:
+    """``folder``, followed by "(no such folder)" when it is not one."""
+    try:
+        return str(folder) if folder.is_dir() else f"{folder} (no such folder)"
+    except OSError:  # no permission to look
+        return f"{folder} (not readable)"
+
+
 def _path_list(value: str) -> list[Path]:
     """The folders of a colon-separated path variable, empty entries left out."""
     return [Path(part) for part in value.split(os.pathsep) if part.strip()]
@@ -240,14 +304,17 @@ def _direct_package(folder: Path, name: str) -> Package | None:
     package it holds, e.g. ``moveit_resources/moveit_resources``: the search finds it).
     """
     candidate = folder / name
-    if not candidate.is_dir():
+    try:
+        if not candidate.is_dir():
+            return None
+    except OSError:  # no permission to look: not there, as for the search
         return None
     manifest = candidate / MANIFEST
-    if manifest.is_file():  # its name may differ (example-robot-data/: example_robot_data)
+    if _is_file(manifest):  # its name may differ (example-robot-data/: example_robot_data)
         return Package(name, candidate.resolve(), manifest)
     for sub in _subfolders(candidate):
         inner = sub / MANIFEST
-        if not is_skipped(sub) and inner.is_file() and package_name(inner) == name:
+        if not is_skipped(sub) and _is_file(inner) and package_name(inner) == name:
             return None
     return Package(name, candidate.resolve())
 
@@ -259,7 +326,10 @@ def _search(top: Path) -> Iterator[Package]:
         InputError: Deeper than :data:`MAX_PACKAGE_DEPTH`, or more than
             :data:`MAX_FOLDERS_VISITED` folders.
     """
-    if not top.is_dir() or any((top / marker).exists() for marker in IGNORE_MARKERS):
+    try:
+        if not top.is_dir() or any((top / marker).exists() for marker in IGNORE_MARKERS):
+            return
+    except OSError:  # no permission to look into it
         return
     todo: list[tuple[Path, int]] = [(top, 0)]
     visited = 0
@@ -274,7 +344,7 @@ def _search(top: Path) -> Iterator[Package]:
                 "workspace's src) or put a COLCON_IGNORE file in the folders not to search",
             )
         manifest = folder / MANIFEST
-        if manifest.is_file():
+        if _is_file(manifest):
             yield Package(package_name(manifest), folder.resolve(), manifest)
             continue  # a package: not entered
         below = [sub for sub in _subfolders(folder) if not is_skipped(sub)]
@@ -286,6 +356,14 @@ def _search(top: Path) -> Iterator[Package]:
                 "packages or put a COLCON_IGNORE file in the folders not to search",
             )
         todo.extend((sub, depth + 1) for sub in reversed(below))
+
+
+def _is_file(path: Path) -> bool:
+    """Whether ``path`` is a file; False when it cannot be looked at (no permission)."""
+    try:
+        return path.is_file()
+    except OSError:
+        return False
 
 
 def _subfolders(folder: Path) -> list[Path]:

@@ -34,7 +34,7 @@ from clik.model.loading import (
 )
 from clik.model.mimic import Mimic
 from clik.model.mjcf import mjcf_visual_model
-from clik.model.mjcf_check import MjcfDocument
+from clik.model.mjcf_root import MjcfDocument
 from clik.model.model_signature import check_unchanged, joint_signature, model_signature
 from clik.model.robot_reader import read_robot
 from clik.model.sources import available_robots
@@ -68,7 +68,7 @@ class Robot:
             ``lock`` given to :meth:`load` and the mimic followers it locked.
         signature: ``(nq, nv, njoints, nframes)`` of ``model`` when the robot was made
             (:meth:`check_model`).
-        mjcf: An MJCF model's checked document (:class:`~clik.model.mjcf_check.MjcfDocument`,
+        mjcf: An MJCF model's checked document (:class:`~clik.model.mjcf_root.MjcfDocument`,
             what Pinocchio read; its visual geometry is read from it), or None.
         srdf_path: The SRDF file read (:mod:`clik.model.srdf`), or None.
         disabled_collision_pairs: The SRDF's ``<disable_collisions>`` link pairs, each
@@ -433,7 +433,7 @@ class Robot:
         array = float_array(q, field, expected)
         if array.shape != (self.nq,):
             raise InputError(field, expected, got=shown(array))
-        return configurations.base_rotations(self.model, array, field)
+        return configurations.unit_rotations(self.model, array, field)
 
     def configuration(self, values: object, unit: str = "rad", field: str = "q0") -> np.ndarray:
         """A configuration from joint values as a user writes them.

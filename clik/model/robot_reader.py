@@ -25,7 +25,7 @@ from typing import Any
 
 from clik.errors import InputError
 from clik.model import srdf as srdf_files
-from clik.model.base import FIXED, check_base_options, set_base_speed
+from clik.model.base import check_base_options, set_base_speed
 from clik.model.loading import build_models, check_mesh_extents, digest, reference_configuration
 from clik.model.locking import lock_values, reduced, set_locked
 from clik.model.mimic import Mimic, mimic_joints, mimic_values, warn_free_leaders
@@ -56,9 +56,12 @@ def read_robot(
     speed = check_base_options(base, base_speed, lock)
     files = source_files(source)
     if is_mjcf(files.urdf):
-        return _read_mjcf(cls, files, lock, xacro_args, base, srdf)
+        return _read_mjcf(cls, files, lock, xacro_args, base, speed, srdf)
     srdf_path = srdf_files.srdf_file(srdf, files.srdf)  # InputError for a bad srdf=
     urdf = files.urdf
+    if isinstance(package_dirs, str | Path):
+        expected = "a list of folders, e.g. ['ws/src'] (not one string)"
+        raise InputError("package_dirs", expected, str(package_dirs))
     dirs = [str(d) for d in (files.package_dirs if package_dirs is None else package_dirs)]
     args = check_xacro_args(xacro_args)
     if args and not is_xacro(urdf):
@@ -91,11 +94,13 @@ def _read_mjcf(
     lock: Mapping[str, float] | None,
     xacro_args: Mapping[str, str] | None,
     base: str,
+    speed: tuple[float, float],
     srdf: str | Path | bool | None,
 ) -> Robot:
-    """An MJCF model's robot (:mod:`clik.model.mjcf`); options it cannot take refused."""
-    refused = {"xacro_args": xacro_args, "srdf": srdf, "base": base != FIXED and base}
-    model, collision_model, q_reference, document = load_mjcf(files.urdf, refused)
+    """An MJCF robot with its base (:mod:`clik.model.mjcf`); options it cannot take refused."""
+    refused = {"xacro_args": xacro_args, "srdf": srdf}
+    model, collision_model, q_reference, document = load_mjcf(files.urdf, refused, base)
+    set_base_speed(model, speed)
     robot = cls(files.name, files.urdf.resolve(), [], model, collision_model, q_reference)
     robot.mjcf = document
     return locked_robot(robot, dict(lock)) if lock else robot

@@ -117,7 +117,8 @@ def expand_xacro(
             document = xacro.process_file(str(scope.file), mappings=given, verbosity=0)
             text: str = document.toprettyxml(indent="  ")
         except Exception as error:  # xacro raises many kinds: all become clik errors
-            raise _clik_error(error, scope, given, list(xacro.filestack or [])) from None
+            files, macros = list(xacro.filestack or []), _macro_stack(xacro)
+            raise _clik_error(error, scope, given, files, macros) from None
     if messages.getvalue().strip():
         warnings.warn(
             XacroWarning(f"xacro, expanding {file}: {' '.join(messages.getvalue().split())}"),
@@ -314,10 +315,35 @@ def _causes(error: BaseException) -> Iterator[BaseException]:
         todo += [current.__cause__, current.__context__]
 
 
+def _macro_stack(xacro: Any) -> list[tuple[str, str]]:
+    """The macros xacro was expanding, innermost first: (name, file defining it).
+
+    What ``xacro`` itself prints as "when instantiating macro: ... instantiated from:".
+    """
+    stack: list[tuple[str, str]] = []
+    for macro in reversed(getattr(xacro, "macrostack", None) or []):
+        try:
+            name = str(macro.body.getAttribute("name"))
+            defined = str((macro.history[-1] if macro.history else [None])[-1] or "?")
+        except (AttributeError, IndexError, TypeError):  # another xacro version: said less
+            continue
+        stack.append((name, defined))
+    return stack
+
+
 def _clik_error(
-    error: Exception, scope: _Scope, given: _TrackedArgs, files: list[str]
+    error: Exception,
+    scope: _Scope,
+    given: _TrackedArgs,
+    files: list[str],
+    macros: Sequence[tuple[str, str]] = (),
 ) -> ClikError:
-    """The clik error for an exception raised while xacro expanded ``scope.file``."""
+    """The clik error for an exception raised while xacro expanded ``scope.file``.
+
+    ``files`` is xacro's stack of files being read, ``macros`` its stack of macros
+    being expanded (innermost first, :func:`_macro_stack`): both are named in a
+    :class:`~clik.errors.RobotLoadError`, as the ``xacro`` command names them.
+    """
     from xacro.substitution_args import ArgException
 
     declared = _declared_args(scope.read)
@@ -342,6 +368,11 @@ def _clik_error(
     message = " ".join(str(error).split()) or type(error).__name__
     where = [f for f in files if f and Path(f).resolve() != scope.file]
     inside = f" (in {where[-1]}, included from {scope.file})" if where else ""
+    if macros:
+        chain = ", instantiated from ".join(
+            f"{name!r} (defined in {file})" for name, file in macros
+        )
+        message += f"; when instantiating the macro {chain}"
     return RobotLoadError(scope.file, f"xacro cannot expand it{inside}: {message}")
 
 

@@ -77,3 +77,14 @@ def test_a_missing_folder_is_refused(tmp_path, capsys):
 def test_without_path_lists_the_robots_known_by_name(capsys):
     assert main(["robots"]) == 0
     assert "planar4r" in capsys.readouterr().out
+
+
+def test_two_packages_of_one_name_are_pointed_out(src, capsys):
+    # make_workspace's dup_a/dup and dup_b/dup are both "dup_pkg": colcon refuses them.
+    assert main(["robots", "--path", str(src)]) == 0
+    out = capsys.readouterr().out
+    note = next(line for line in out.splitlines() if line.startswith("note:"))
+    assert "2 packages named 'dup_pkg'" in note and "COLCON_IGNORE" in note
+    assert str(src / "dup_a" / "dup" / "package.xml") in note
+    assert str(src / "dup_b" / "dup" / "package.xml") in note
+    assert "'ws_meshes'" not in out  # the ignored and hidden copies are no duplicates

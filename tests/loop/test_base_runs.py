@@ -20,10 +20,11 @@ from clik.loop.tracker import ReachWarning
 from clik.model.base import BASE_JOINT
 from clik.outputs.result import TrackingResult
 from clik.scenarios.runner import run_scenario
-from clik.trajectory import Hold, Line
+from clik.trajectory import Line
 from clik.viz.robot_layer import joint_path
 from clik.viz.scene import build_scene
 from clik.viz.target import rebuild_robot
+from tests.base_goals import assert_feet_held_hand_tracked, feet_held_hand_line
 from tests.limits_check import assert_completed
 
 ENGINES = ("python", "compiled")
@@ -146,16 +147,8 @@ def test_scene_draws_the_base_where_it_went(tiago_runs) -> None:
 def talos_runs() -> tuple[clik.Robot, list[clik.Goal], dict[str, clik.TrackingResult]]:
     robot = clik.Robot.load("talos", lock=TALOS_LOCK, base="floating")
     q0 = robot.q_reference
-    goals = []
-    for side in ("left", "right"):
-        foot = clik.Task(robot, f"{side}_sole_link", "pose")
-        start = foot.placement(q0)
-        hold = Hold(position=start.translation, rotation=start.rotation)
-        goals.append(clik.Goal(foot, hold, name=f"{side}_foot"))
-    hand = clik.Task(robot, "gripper_left_base_link", "position")
-    start = hand.placement(q0).translation
-    line = Line(start, start + np.array([0.15, 0.1, -0.2]), 2.0)
-    goals.append(clik.Goal(hand, line, name="hand"))
+    feet = ("left_sole_link", "right_sole_link")
+    goals = feet_held_hand_line(robot, q0, feet, "gripper_left_base_link", [0.15, 0.1, -0.2], 2.0)
     runs = run_both(tasks=goals, q0=q0, law="pseudoinverse", gain=500)
     return robot, goals, runs
 
@@ -164,16 +157,7 @@ def talos_runs() -> tuple[clik.Robot, list[clik.Goal], dict[str, clik.TrackingRe
 def test_talos_holds_its_feet_while_a_hand_tracks_a_line(talos_runs, engine: str) -> None:
     robot, goals, runs = talos_runs
     result = runs[engine]
-    assert_completed(result, robot)
-    errors = result.task_errors
-    for foot in ("left_foot", "right_foot"):
-        assert errors[foot]["max"] <= TRACK
-        assert errors[foot]["max_orientation"] <= TRACK
-    assert errors["hand"]["max"] <= TRACK
-    assert np.abs(result.qdot[:, :6]).max() <= 1.0 + 1e-9  # the base's speed limits
-    # the base moved (the body leans to follow the hand), its quaternion stayed unit
-    assert np.linalg.norm(result.q[-1, :3] - result.q[0, :3]) >= 0.02
-    assert np.allclose(np.linalg.norm(result.q[:, 3:7], axis=1), 1.0, atol=1e-12)
+    assert_feet_held_hand_tracked(result, robot, TRACK, moved=0.02)  # [m]: the body leans
     # independent forward kinematics of the recorded joints: the feet never moved
     data = robot.model.createData()
     for goal in goals[:2]:

@@ -23,7 +23,8 @@ from clik.constraints import ConstraintSet, JointLimits, Obstacle
 from clik.errors import InputError, RobotLoadError
 from clik.loop.joint_speed import JointSpeed
 from clik.model import mjcf_check, urdf_check
-from clik.model.mjcf_check import FreeJointWeldedWarning, check_mjcf, is_mjcf
+from clik.model.mjcf_check import check_mjcf, is_mjcf
+from clik.model.mjcf_root import FreeJointWeldedWarning
 from clik.model.sources import our_robots
 from clik.trajectory import Line
 from tests.limits_check import assert_completed, assert_summary_within_limits
@@ -208,9 +209,10 @@ def test_lock_reduces_the_visual_model_too(arm3):
 
 
 @pytest.mark.parametrize(
-    ("option", "value"), [("xacro_args", {"n": "1"}), ("base", "floating"), ("srdf", "x.srdf")]
+    ("option", "value"), [("xacro_args", {"n": "1"}), ("srdf", "x.srdf"), ("base", "rolling")]
 )
 def test_options_an_mjcf_model_does_not_take(option, value):
+    """No xacro arguments or SRDF for an MJCF model; its bases are a URDF's (test_mjcf_bases)."""
     with pytest.raises(InputError) as caught:
         clik.Robot.load("arm3", **{option: value})
     assert caught.value.field == option

@@ -408,3 +408,78 @@ def test_a_package_dir_that_is_a_package_lets_its_files_include_each_other(tmp_p
     assert robot.nq == N_JOINTS
     box = str((package / "meshes" / "box.stl").resolve())
     assert [g.meshPath for g in robot.collision_model.geometryObjects].count(box) == 2
+
+
+def test_a_package_directly_in_the_folder_does_not_hide_a_namesake_below(tmp_path):
+    # franka_description (ROS 2) cloned into src/ next to franka_ros, which holds a
+    # franka_description of its own: colcon refuses the pair, so does clik, rather
+    # than reading the one directly in src/ for a robot of the other.
+    direct = manifest(tmp_path / "franka_description", "franka_description")
+    nested = manifest(tmp_path / "franka_ros" / "franka_description", "franka_description")
+    with pytest.raises(InputError, match="one package named 'franka_description'") as caught:
+        PackageDirs([tmp_path]).find("franka_description")
+    assert caught.value.field == "package_dirs"
+    assert str(direct) in str(caught.value) and str(nested) in str(caught.value)
+    (nested.parent / "COLCON_IGNORE").touch()  # the way out the message gives
+    found = PackageDirs([tmp_path]).find("franka_description")
+    assert found is not None and found.folder == direct.parent.resolve()
+
+
+def test_a_folder_named_otherwise_than_its_package_is_still_found_directly(tmp_path):
+    # example-robot-data's folder and package names differ: no search, as before.
+    manifest(tmp_path / "example-robot-data", "example_robot_data")
+    manifest(tmp_path / "copy" / "example-robot-data", "example-robot-data")
+    found = PackageDirs([tmp_path]).find("example-robot-data")
+    assert found is not None and found.folder == (tmp_path / "example-robot-data").resolve()
+
+
+def test_an_unsearchable_folder_keeps_the_package_found_directly(tmp_path, monkeypatch):
+    manifest(tmp_path / "pkg_a", "pkg_a")
+    (tmp_path / "deep" / "a" / "b" / "c").mkdir(parents=True)
+    monkeypatch.setattr(packages, "MAX_PACKAGE_DEPTH", 1)
+    found = PackageDirs([tmp_path]).find("pkg_a")
+    assert found is not None and found.folder == (tmp_path / "pkg_a").resolve()
+    with pytest.raises(InputError, match="MAX_PACKAGE_DEPTH"):  # a search still says so
+        PackageDirs([tmp_path]).find("pkg_elsewhere")
+
+
+@pytest.mark.parametrize("given", ["SRC", "src"], ids=["absolute-string", "relative-string"])
+def test_a_string_for_package_dirs_is_said_so(src, xacro, given, monkeypatch):
+    # package_dirs="ws/src" instead of ["ws/src"]: one folder per character, "/" among
+    # them; neither the filesystem root is searched nor a bare "not found" said.
+    monkeypatch.chdir(src.parent)
+    folder = str(src) if given == "SRC" else "src"
+    with pytest.raises(InputError, match=r"a list of folders, e.g. \['ws/src'\]") as caught:
+        Robot.load(xacro, package_dirs=folder)
+    assert caught.value.field == "package_dirs" and folder in str(caught.value)
+    with pytest.raises(InputError, match=r"a list of folders"):
+        Robot.load(xacro, package_dirs=Path(folder))
+
+
+def test_a_missing_package_folder_is_named_as_missing(xacro, tmp_path):
+    with pytest.raises(InputError) as caught:
+        Robot.load(xacro, package_dirs=[tmp_path / "scr"])
+    assert f"{tmp_path / 'scr'} (no such folder)" in str(caught.value)
+
+
+def test_folders_that_cannot_be_looked_into_are_skipped(tmp_path, monkeypatch):
+    # As /proc/1/fdinfo for a user: Path.exists raises PermissionError there.
+    manifest(tmp_path / "repo" / "pkg_ok", "pkg_ok")
+    locked = tmp_path / "locked"
+    manifest(locked / "pkg_locked", "pkg_locked")
+    exists, is_file = Path.exists, Path.is_file
+
+    def refused(method):
+        def check(path: Path, *args, **kwargs) -> bool:
+            if path.is_relative_to(locked) and path != locked:
+                raise PermissionError(13, "Permission denied", str(path))
+            return method(path, *args, **kwargs)
+
+        return check
+
+    monkeypatch.setattr(Path, "exists", refused(exists))
+    monkeypatch.setattr(Path, "is_file", refused(is_file))
+    dirs = PackageDirs([tmp_path])
+    found = dirs.find("pkg_ok")
+    assert found is not None and found.folder == (tmp_path / "repo" / "pkg_ok").resolve()
+    assert dirs.find("pkg_locked") is None

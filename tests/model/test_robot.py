@@ -300,3 +300,18 @@ def test_load_warnings_point_at_the_callers_line():
     assert {"ReferenceClippedWarning", "MimicJointWarning"} <= set(kinds)
     for w in caught:
         assert w.filename == __file__, (w.category.__name__, w.filename)
+
+
+def test_a_continuous_joints_pair_must_be_a_unit_vector(tmp_path):
+    """A (cos, sin) pair far from unit would reach Pinocchio and the run diverge: refused;
+    one written with few digits is normalised."""
+    urdf = tmp_path / "wheel.urdf"
+    urdf.write_text(
+        '<robot name="wheel"><link name="a"/><link name="b"/>'
+        '<joint name="j" type="continuous"><parent link="a"/><child link="b"/>'
+        '<axis xyz="0 0 1"/></joint></robot>'
+    )
+    robot = Robot.load(urdf)
+    with pytest.raises(InputError, match=r"q0: .*\(cos, sin\) pair"):
+        robot.check_configuration([0.5, 0.5])
+    np.testing.assert_allclose(robot.check_configuration([0.7071, 0.7071]), [0.5**0.5] * 2)

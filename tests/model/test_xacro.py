@@ -468,3 +468,27 @@ def test_sweep_workers_load_xacro_robots_with_their_arguments():
     assert cached_robot(spec).nq == 7
     assert cached_robot(other).nq == 5
     assert cached_robot(other) is cached_robot(other)
+
+
+def test_an_error_inside_a_macro_names_the_macros_and_their_files(tmp_path):
+    # kortex_description's gen3_lite_gen3_lite_2f.xacro: load_robot passes a parameter
+    # ("gripper") that the arm's macro, in another file, does not take.
+    inner = tmp_path / "pkg" / "urdf" / "arm_macro.xacro"
+    inner.parent.mkdir(parents=True)
+    inner.write_text(
+        '<robot xmlns:xacro="http://www.ros.org/wiki/xacro">'
+        '<xacro:macro name="load_arm" params="prefix"><link name="${prefix}c"/></xacro:macro>'
+        "</robot>"
+    )
+    body = (
+        '<xacro:include filename="arm_macro.xacro"/>'
+        '<xacro:macro name="load_robot" params="">'
+        '<xacro:load_arm prefix="" gripper="2f"/></xacro:macro><xacro:load_robot/>'
+    )
+    path = xacro_file(tmp_path, body)
+    with pytest.raises(RobotLoadError) as caught:
+        Robot.load(path)
+    message = str(caught.value)
+    assert 'Invalid parameter "gripper"' in message
+    assert f"the macro 'load_arm' (defined in {inner})" in message
+    assert f"instantiated from 'load_robot' (defined in {path})" in message
