@@ -2,6 +2,7 @@
 #   make demo   creates .venv, installs clik, runs the case study (out/demo)
 #   make test   creates .venv with the test extras, runs every test and notebook
 #   make lint   ruff (style, docstrings) and mypy (types) on clik/
+#   make docs   the documentation site (MkDocs, mkdocs.yml), built strictly into site/
 #   make sanitize  the engine built with AddressSanitizer and UBSan (.venv-sanitize,
 #               build/sanitize), the engine's tests run under it; fails on any report
 
@@ -11,36 +12,55 @@ PY     := $(VENV)/bin/python
 PIP    := $(PY) -m pip --disable-pip-version-check
 NOTEBOOKS := $(wildcard notebooks/*.ipynb)
 ENGINE  := $(shell find src/engine -type f)
-# The engine's build requirements, read from pyproject.toml (one list): installed into
-# the venv first, so that pip builds without isolation and rebuilds incrementally (build/).
-BUILD_REQUIRES = $(shell $(PY) -c "import tomllib; print(' '.join(repr(r) for r in tomllib.load(open('pyproject.toml', 'rb'))['build-system']['requires']))")
+# The build's output (pip, the compiler) goes to one log; the terminal gets one line per
+# step, and on a failure the log's last 40 lines and its path.
+LOG    ?= out/build.log
+# The requirements to install before the engine compiles (one per line): the engine's
+# build requirements (pip then builds without isolation and rebuilds incrementally in
+# build/), cmake, ninja, clik's dependencies and those of the extras named in $(1).
+REQUIREMENTS = $(PY) -c "import sys, tomllib; p = tomllib.load(open('pyproject.toml', 'rb')); o = p['project']['optional-dependencies']; print('\n'.join(p['build-system']['requires'] + ['cmake', 'ninja'] + p['project']['dependencies'] + [r for e in sys.argv[1].split(',') if e for r in o[e]]))" "$(1)"
+TEST_EXTRAS := test,notebooks,bench,lint,docs
+# $(call logged,COMMAND): COMMAND with its output appended to $(LOG); on failure, the
+# log's last 40 lines and its path on stderr, and make stops.
+logged = mkdir -p $(dir $(LOG)) && { $(1); } >>$(LOG) 2>&1 || { echo "clik: failed; the last 40 lines of $(LOG):" >&2; tail -n 40 $(LOG) >&2; echo "clik: the full log is $(LOG)" >&2; exit 1; }
+NEED_CXX = command -v c++ >/dev/null 2>&1 || { echo "clik compiles its engine (C++17): no C++ compiler found; install one (Debian/Ubuntu: sudo apt-get install g++)" >&2; exit 1; }
+COMPILE_MSG = compiling the engine (the first time about 5-9 min on 2 cores, peak about 2.5 GB of memory; log: $(LOG))...
 
-.PHONY: demo test lint bench sanitize clean
+.PHONY: demo test lint docs bench sanitize clean
 
-$(PY):
-	$(PYTHON) -m venv $(VENV)
-	$(PIP) install --quiet --upgrade pip
+VENV_NEW = test -x $(PY) || { $(PYTHON) -m venv $(VENV) && $(PIP) install --upgrade pip; }
 
-$(VENV)/.build-requires: $(PY) pyproject.toml
-	@command -v c++ >/dev/null 2>&1 || { echo "clik compiles its engine (C++17): no C++ compiler found; install one (Debian/Ubuntu: sudo apt-get install g++)" >&2; exit 1; }
-	@echo "installing the engine's build requirements into $(VENV): $(BUILD_REQUIRES) cmake ninja"
-	$(PIP) install --progress-bar on $(BUILD_REQUIRES) cmake ninja
-	touch $@
+# Step 1: dependencies (Pinocchio, coal, meshcat, Dask...; about 1.7 GB in $(VENV)).
+$(VENV)/.deps: pyproject.toml
+	@echo "clik: 1/3 installing dependencies into $(VENV) (log: $(LOG))..."
+	@$(call logged,$(VENV_NEW) && $(call REQUIREMENTS,) > $(VENV)/requirements.txt && $(PIP) install -r $(VENV)/requirements.txt)
+	@touch $@
 
-$(VENV)/.installed: $(VENV)/.build-requires pyproject.toml $(ENGINE)
-	@echo "installing clik and its dependencies (Pinocchio, coal, meshcat, Dask...) into $(VENV), compiling its engine (a few minutes the first time)"
-	$(PIP) install --progress-bar on --no-build-isolation -e .
-	touch $@
+$(VENV)/.deps-test: pyproject.toml
+	@echo "clik: 1/3 installing dependencies with the extras $(TEST_EXTRAS) into $(VENV) (log: $(LOG))..."
+	@$(call logged,$(VENV_NEW) && $(call REQUIREMENTS,$(TEST_EXTRAS)) > $(VENV)/requirements-test.txt && $(PIP) install -r $(VENV)/requirements-test.txt)
+	@touch $@ $(VENV)/.deps
 
-$(VENV)/.installed-test: $(VENV)/.build-requires pyproject.toml $(ENGINE)
-	@echo "installing clik with its test, notebook, benchmark and lint extras into $(VENV), compiling its engine (a few minutes the first time)"
-	$(PIP) install --progress-bar on --no-build-isolation -e ".[test,notebooks,bench,lint]"
-	touch $@ $(VENV)/.installed
+# Step 2: clik itself, editable, with its engine compiled (src/engine).
+$(VENV)/.installed: $(VENV)/.deps pyproject.toml $(ENGINE)
+	@$(NEED_CXX)
+	@echo "clik: 2/3 $(COMPILE_MSG)"
+	@$(call logged,$(PIP) install --no-deps --no-build-isolation -e .)
+	@touch $@
+
+$(VENV)/.installed-test: $(VENV)/.deps-test pyproject.toml $(ENGINE)
+	@$(NEED_CXX)
+	@echo "clik: 2/3 $(COMPILE_MSG)"
+	@$(call logged,$(PIP) install --no-deps --no-build-isolation -e .)
+	@touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed
-	$(VENV)/bin/clik demo --out out/demo --force
+	@echo "clik: 3/3 running the demo ($(VENV)/bin/clik demo --out out/demo)..."
+	@$(VENV)/bin/clik demo --out out/demo --force
+	@echo "clik: done; run clik as $(VENV)/bin/clik (or 'source $(VENV)/bin/activate', then clik); see README.md"
 
 test: $(VENV)/.installed-test
+	@echo "clik: 3/3 running the tests ($(PY) -m pytest tests ...)"
 	$(PY) -m pytest tests $(if $(NOTEBOOKS),--nbmake --nbmake-timeout=120 $(NOTEBOOKS)) --timeout=600 -q
 
 lint: $(VENV)/.installed-test
@@ -48,8 +68,14 @@ lint: $(VENV)/.installed-test
 	$(VENV)/bin/ruff format --check clik tests
 	$(VENV)/bin/mypy
 
+# The site (docs/, mkdocs.yml) into site/; --strict: a broken link, a page missing from the
+# navigation or an API entry that does not resolve fails the build.
+docs: $(VENV)/.installed-test
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site
+
 bench: $(VENV)/.installed
-	$(PIP) install --quiet -e ".[bench]"
+	@echo "clik: installing the bench extra into $(VENV) (log: $(LOG))..."
+	@$(call logged,$(call REQUIREMENTS,bench) > $(VENV)/requirements-bench.txt && $(PIP) install -r $(VENV)/requirements-bench.txt)
 	$(VENV)/bin/clik bench --out out/bench
 
 # -- make sanitize ---------------------------------------------------------------------

@@ -21,6 +21,7 @@ from clik.commands.launch import add_bench, add_demo, add_robots, add_show
 from clik.commands.reach import add_reach
 from clik.commands.solve import add_solve
 from clik.commands.sweep import add_sweep
+from clik.commands.warning_lines import cli_warnings
 from clik.errors import EXIT_CODES, ClikError
 
 BROKEN_PIPE = 141
@@ -52,8 +53,19 @@ def _silence_stdout() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``clik`` command (exit codes: see the module's docstring)."""
+    """Entry point of the ``clik`` command (exit codes: see the module's docstring).
+
+    Warnings raised while the command runs are printed as one line each,
+    ``clik: warning: <message> [<category>]``, each distinct message once
+    (:mod:`clik.commands.warning_lines`); Python's own warning settings come back after.
+    """
     args = parser().parse_args(argv)
+    with cli_warnings():
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run the parsed command; errors become a line on stderr and an exit code."""
     try:
         code = int(args.func(args) or 0)
         sys.stdout.flush()  # here, not at exit: a closed pipe is then a BrokenPipeError below

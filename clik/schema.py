@@ -8,6 +8,7 @@ never read (unknown keys), listing the valid ones.
 
 from __future__ import annotations
 
+import difflib
 import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -69,7 +70,18 @@ class Table:
         message = f"expected {expected}"
         if got is not _MISSING:
             message += f", got {shown(got)}"
+        elif name not in self.data:  # a key needed here and absent: maybe misspelt
+            return self._typo(name) or ScenarioError(self.file, self.key(name), message)
         return ScenarioError(self.file, self.key(name), message)
+
+    def _typo(self, name: str) -> ScenarioError | None:
+        """The error naming an unread key of the file that looks like the absent ``name``."""
+        typo = _closest(name, [k for k in self.data if k not in self._read])
+        if typo is None:
+            return None
+        return ScenarioError(
+            self.file, self.key(typo), f"unknown key; did you mean `{name}`? (`{name}` is needed)"
+        )
 
     def has(self, name: str) -> bool:
         """Whether the key is present."""
@@ -80,7 +92,8 @@ class Table:
         self._read.add(name)
         if name not in self.data:
             if default is _MISSING:
-                raise ScenarioError(self.file, self.key(name), "required key is missing")
+                missing = ScenarioError(self.file, self.key(name), "required key is missing")
+                raise self._typo(name) or missing
             return default
         return self.data[name]
 
@@ -200,6 +213,24 @@ class Table:
         unknown = sorted(set(self.data) - self._read)
         if unknown:
             valid = ", ".join(sorted(self._read))
+            guess = _closest(unknown[0], sorted(self._read))
+            hint = f"did you mean `{guess}`? " if guess is not None else ""
             raise ScenarioError(
-                self.file, self.key(unknown[0]), f"unknown key; valid keys here: {valid}"
+                self.file, self.key(unknown[0]), f"unknown key; {hint}valid keys here: {valid}"
             )
+
+
+TYPO_CUTOFF = 0.8
+"""Similarity (:class:`difflib.SequenceMatcher` ratio) from which a key is taken for a typo
+of another (``duraton``/``duration`` 0.93, ``centre``/``center`` 0.83)."""
+
+
+def _closest(name: str, keys: Sequence[str]) -> str | None:
+    """The key of ``keys`` closest to ``name`` (one a typo of the other), or None.
+
+    Args:
+        name: A key (the schema's required key, or the file's unknown key).
+        keys: The keys to compare it with (the file's unread keys, or the schema's).
+    """
+    found = difflib.get_close_matches(name, list(keys), n=1, cutoff=TYPO_CUTOFF)
+    return found[0] if found else None

@@ -118,7 +118,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
     if args.export_every is not None and not args.export:
         raise InputError("--export-every", "to be given with --export", args.export_every)
-    run = build(args.scenario)
+    run = build(scenario_file(args.scenario))
     if args.engine is not None:
         run.tracker.engine = args.engine
     if args.export:
@@ -132,10 +132,38 @@ def cmd_solve(args: argparse.Namespace) -> int:
     extras = [out / p.relative_to(work) for p in written]
     if not args.quiet:
         print_summary(run.scenario.name, summary)
-        print(f"  wrote {out / 'summary.json'} and {out / 'trajectory.npz'}")
-        if extras:
-            print("  and " + ", ".join(str(p) for p in extras))
+        print("  " + wrote_line([out / "summary.json", out / "trajectory.npz", *extras]))
     return EXIT_CODES["infeasible"] if result.status in FAILED_STATUSES else 0
+
+
+def wrote_line(files: Sequence[Path]) -> str:
+    """``wrote DIR/a, DIR/b and DIR/c``: every file a command wrote, in one line."""
+    names = [str(p) for p in files]
+    if len(names) < 2:
+        return "wrote " + "".join(names)
+    return f"wrote {', '.join(names[:-1])} and {names[-1]}"
+
+
+def scenario_file(text: str | Path) -> Path:
+    """The scenario ``clik solve`` runs: a file, else a shipped scenario's name.
+
+    Shipped names are those a sweep's ``base`` accepts (:func:`clik.sweep.spec.locate_scenario`).
+
+    Raises:
+        InputError: Neither a file nor a shipped name; the message lists the shipped names.
+    """
+    from clik.sweep.spec import locate_scenario, shipped_scenarios
+
+    found = locate_scenario(str(text), Path.cwd())
+    if found is None and ("/" in str(text) or str(text).endswith(".toml")):
+        raise InputError("scenario", "an existing scenario file (no such scenario file)", str(text))
+    if found is None:
+        raise InputError(
+            "scenario",
+            "a scenario file or a shipped scenario name: " + ", ".join(shipped_scenarios()),
+            str(text),
+        )
+    return found
 
 
 def write_extras(
@@ -162,6 +190,13 @@ def write_extras(
     return written
 
 
+def _shipped() -> list[str]:
+    """The shipped scenarios' names, for the help text."""
+    from clik.sweep.spec import shipped_scenarios
+
+    return shipped_scenarios()
+
+
 def _export_every(text: str) -> int:
     """The ``K`` of ``clik solve --export-every K``: an integer >= 1."""
     try:
@@ -175,8 +210,21 @@ def _export_every(text: str) -> int:
 
 def add_solve(sub: Any) -> None:
     """The ``clik solve`` subcommand."""
-    s = sub.add_parser("solve", help="run a scenario file")
-    s.add_argument("scenario", type=Path)
+    s = sub.add_parser(
+        "solve",
+        help="run a scenario file (or a shipped scenario by name)",
+        description="Run a scenario: a TOML file, or the name of a shipped scenario "
+        "(clik/scenarios/NAME.toml, as a sweep's base accepts). Shipped: "
+        + ", ".join(_shipped())
+        + ". Exit code 3 (infeasible) when the run ends "
+        + ", ".join(FAILED_STATUSES[:-1])
+        + f" or {FAILED_STATUSES[-1]} (its outputs are still written), 2 on bad input.",
+    )
+    s.add_argument(
+        "scenario",
+        metavar="SCENARIO",
+        help="a scenario file (.toml) or a shipped scenario's name (panda_circle, ...)",
+    )
     s.add_argument("--out", required=True, help="output folder")
     s.add_argument("--force", action="store_true", help="write into an existing output folder")
     s.add_argument("--html", action="store_true", help="also write DIR/scene.html")

@@ -1,7 +1,9 @@
 """``clik sweep``: run a sweep file (many scenarios) on Dask, and count its runs per status.
 
 Exit code 1 (:data:`SWEEP_FAILED`) when a run in the output folder raised, or
-ended ``violated``, ``velocity_limit`` or ``diverged``; every row is still written.
+ended with a status of :data:`clik.sweep.report.FAILED_STATUSES`; every row is
+still written (:func:`failed_text` says so in ``--help``). ``clik sweep --table
+DIR`` prints a finished sweep's results table as CSV, without pandas.
 """
 
 from __future__ import annotations
@@ -12,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 SWEEP_FAILED = 1
-"""Exit code of ``clik sweep`` when a run in its folder raised or ended violated or diverged."""
+"""Exit code of ``clik sweep`` when a run in its folder raised or ended with a failed status."""
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
@@ -22,10 +24,20 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     per status, e.g. ``completed 118, deadlock 1, violated 1, raised 0``. A
     failed sweep also says so on stderr, ``--quiet`` or not.
     """
+    from clik.errors import InputError
     from clik.sweep.execute import run_sweep
     from clik.sweep.report import status_line
     from clik.sweep.spec import load_sweep
 
+    if args.table is not None:
+        from clik.sweep.table import results_csv
+
+        sys.stdout.write(results_csv(args.table))
+        return 0
+    if args.sweep is None:
+        raise InputError("sweep", "a sweep file (or --table DIR to print a results table)")
+    if args.out is None:
+        raise InputError("--out", "an output folder (rerun to resume)")
     sweep = load_sweep(args.sweep)
     try:
         report = run_sweep(
@@ -54,7 +66,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         )
         if report.lost:
             print(f"  {report.lost} runs were cancelled by the cluster: rerun to compute them")
-        print(f"  wrote {report.results}")
+        print(f"  wrote {report.results} (clik sweep --table {args.out} prints it as CSV)")
         print(status_line(report.all_statuses))
     if report.failed:
         print(
@@ -67,17 +79,37 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def failed_text() -> str:
+    """The exit-1 sentence of ``clik sweep --help``, from the statuses' table in code.
+
+    The statuses are :data:`clik.sweep.report.FAILED_STATUSES`, so help and code agree.
+    """
+    from clik.sweep.report import FAILED_STATUSES, RAISED, STATUS_ORDER
+
+    listed = [s for s in STATUS_ORDER if s in FAILED_STATUSES]
+    listed += sorted(FAILED_STATUSES - set(listed))
+    return (
+        f"Exit code {SWEEP_FAILED} when a run in the output folder raised (status {RAISED}) "
+        f"or ended {', '.join(listed[:-1])} or {listed[-1]} (every row is still written)."
+    )
+
+
 def add_sweep(sub: Any) -> None:
     """The ``clik sweep`` subcommand."""
     w = sub.add_parser(
         "sweep",
         help="run a sweep file (many scenarios) on Dask",
-        description="Run a sweep file (many scenarios) on Dask. Exit code 1 when a run in the "
-        "output folder raised or ended violated or diverged (every row is still written); the "
-        "last line counts the runs per status.",
+        description="Run a sweep file (many scenarios) on Dask. " + failed_text() + " The "
+        "last line counts the runs per status. clik sweep --table DIR prints the results "
+        "table of a sweep's output folder as CSV (no pandas needed).",
     )
-    w.add_argument("sweep", type=Path, help="the sweep file (TOML)")
-    w.add_argument("--out", required=True, help="output folder (rerun to resume)")
+    w.add_argument("sweep", type=Path, nargs="?", help="the sweep file (TOML)")
+    w.add_argument("--out", help="output folder (rerun to resume); required to run a sweep")
+    w.add_argument(
+        "--table",
+        metavar="DIR",
+        help="print the results table of the sweep output folder DIR as CSV, run nothing",
+    )
     where = w.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, help="local worker processes (default: one per CPU)")
     where.add_argument("--scheduler", help="an existing Dask scheduler, tcp://HOST:PORT")

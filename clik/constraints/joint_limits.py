@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clik.bounds import in_range, real
+from clik.constraints.joint_thresholds import check_angles, warn_capped
 from clik.constraints.kind import (
     CHECK_TOLERANCE,
     Candidate,
@@ -97,6 +98,14 @@ class JointLimits(ConstraintKind):
             revolute and prismatic joints.
         prismatic_threshold: ``d_q`` of the prismatic joints [m]; default: ``threshold``.
         gain: The rows' gain [1/s]; None: the law's default.
+        warn_cap: Warn (:class:`~clik.constraints.joint_thresholds.ThresholdCapWarning`)
+            when a threshold is capped (:mod:`clik.constraints.joint_thresholds`); False
+            for rows clik derives from capped thresholds (solve mode's).
+
+    Raises:
+        InputError: A threshold that is not positive, a revolute one above 2 pi
+            (degrees read as radians), or one at least as wide as every joint range
+            of its kind; a bad override.
 
     Attributes:
         joint_names: The limited joints (rows exist for these only).
@@ -119,6 +128,7 @@ class JointLimits(ConstraintKind):
         override: Mapping[str, Mapping[str, float]] | None = None,
         prismatic_threshold: float | None = None,
         gain: float | None = None,
+        warn_cap: bool = True,
     ) -> None:
         self.robot = robot
         self.gain = gain
@@ -181,6 +191,8 @@ class JointLimits(ConstraintKind):
             thr[[k == PRISMATIC for k in self.kinds]] = p_thr
         self._check_usable(thr, model, prismatic=prismatic_threshold is not None)
         self.threshold = np.minimum(thr, RANGE_FRACTION * (self.upper - self.lower))
+        if warn_cap:
+            warn_capped(self.joint_names, self.kinds, thr, self.threshold, p_thr is not None)
         self.names = [f"joint:{name}:lower" for name in self.joint_names] + [
             f"joint:{name}:upper" for name in self.joint_names
         ]
@@ -215,6 +227,7 @@ class JointLimits(ConstraintKind):
         kinds = [(REVOLUTE, "threshold", "rad")]
         if prismatic:
             kinds.append((PRISMATIC, "prismatic_threshold", "m"))
+        check_angles(thr, self.kinds)  # degrees read as radians
         for kind, key, unit in kinds:
             mine = np.array([k == kind for k in self.kinds], dtype=bool)
             ranges = urdf[mine][np.isfinite(urdf[mine]) & (urdf[mine] > 0.0)]
@@ -378,7 +391,7 @@ def robot_limit_rows(
             for name, lo, hi in zip(limits.joint_names, limits.lower, limits.upper, strict=True)
         }
         gain = limits.gain
-    return JointLimits(robot, thresholds, override, gain=gain)
+    return JointLimits(robot, thresholds, override, gain=gain, warn_cap=False)
 
 
 class JointRangeRun(KindRun):

@@ -67,7 +67,8 @@ class Workspace(ConstraintKind):
     Args:
         robot: The robot (its frames).
         frame: The frame whose origin is kept in the box.
-        lower, upper: The box's corners (3,) [m], world frame, ``lower < upper``.
+        lower: The box's lower corner (3,) [m], world frame, ``lower < upper``.
+        upper: The box's upper corner (3,) [m], world frame.
         threshold: ``d_w`` [m]: a wall's row is active within this distance of it;
             at most a quarter of the box's shortest side.
         name: The box's name in constraint keys (default: the frame's name).

@@ -27,6 +27,7 @@ from clik.loop.laws import LawName, check_law, nonlinear, prioritized, transpose
 from clik.loop.levels import prioritized_levels
 from clik.loop.recording import bytes_per_sample, kept_samples
 from clik.loop.reference_stream import REFERENCE_CHUNK, ReferenceChunks
+from clik.loop.start_checks import warn_start
 from clik.loop.stop_checks import checked_settings
 from clik.loop.task_stack import checked_tasks
 from clik.loop.tracking import ProgressCallback, _Run
@@ -418,7 +419,8 @@ class Tracker:
         return chunks, out_of_reach
 
     def _warn_stability(self, q: np.ndarray) -> None:
-        """Warn when the gains break explicit Euler's bound at ``q0``."""
+        """Warn when the gains break explicit Euler's bound at ``q0``, or ``q0`` is a poor start."""
+        warn_start(self.task, q, self.constraints)  # clik.loop.start_checks
         if self.law == "pseudoinverse":
             gains = [self.alpha]
             if self.constraints is not None:

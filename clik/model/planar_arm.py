@@ -37,9 +37,11 @@ LINK_RADIUS_VISUAL = 0.01
 Numbers = Sequence[float] | npt.NDArray[np.float64]
 """Numbers given as a sequence (list, tuple) or as a float array."""
 
-_COLORS = ((0.95, 0.55, 0.1, 1.0), (0.2, 0.45, 0.8, 1.0))
+# neutral tones: the scene's legend colours (blue reference, orange "closest link inside
+# threshold", red "active row", ...) stay reserved for states (clik.viz.palette.LEGEND)
+_COLORS = ((0.72, 0.72, 0.7, 1.0), (0.5, 0.52, 0.55, 1.0))
 _GREY = (0.4, 0.4, 0.4, 1.0)
-_RED = (0.85, 0.1, 0.1, 1.0)
+_TIP = (0.36, 0.36, 0.4, 1.0)
 
 
 def planar_forward_kinematics(lengths: Numbers, q: npt.ArrayLike) -> npt.NDArray[np.float64]:
@@ -165,7 +167,7 @@ def _links(lengths: npt.NDArray[np.float64], capsule_radius: float) -> list[your
             yourdfpy.Geometry(cylinder=yourdfpy.Cylinder(capsule_radius, length)),
         )
         links.append(_link(f"link{i}", visuals, [capsule]))
-    links.append(_link("tip", [_visual("tip", yourdfpy.Sphere(1.5 * LINK_RADIUS_VISUAL), _RED)]))
+    links.append(_link("tip", [_visual("tip", yourdfpy.Sphere(1.5 * LINK_RADIUS_VISUAL), _TIP)]))
     return links
 
 

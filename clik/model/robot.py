@@ -28,6 +28,7 @@ from clik.model import configuration as configurations
 from clik.model import srdf as srdf_files
 from clik.model.base import base_kind
 from clik.model.configuration import float_array, shown
+from clik.model.fingers import open_fingers
 from clik.model.joints import JointValues, joint_kind, joint_units
 from clik.model.loading import (
     read_visual_model,
@@ -112,7 +113,9 @@ class Robot:
         self._threads.data = self.data  # this thread's: the robot's own, as before threads
         self.collision_model = collision_model
         self.collision_data = collision_model.createData()
-        self._q_reference = self.check_configuration(q_reference, "q_reference")
+        self._q_reference = open_fingers(
+            model, self.check_configuration(q_reference, "q_reference")
+        )
         self._visual_model = visual_model
         self._reduction: tuple[pin.Model, list[int], np.ndarray] | None = None
         self._source_digest: str | None = None  # of the file as checked, see visual_model
@@ -147,7 +150,9 @@ class Robot:
         names (:meth:`available`), then an example-robot-data name. The
         reference configuration is the SRDF's reference posture where
         example-robot-data names one (the Panda's "default" ready pose), else
-        Pinocchio's neutral configuration clipped into the joint limits.
+        Pinocchio's neutral configuration clipped into the joint limits, with a
+        gripper's fingers in the middle of their range (the Panda's 0.001 m becomes
+        0.02 m, outside any joint-range threshold: :func:`~clik.model.fingers.open_fingers`).
         A file whose root is ``<mujoco>`` is an MJCF model (:func:`clik.model.mjcf.load_mjcf`,
         its ``home`` key as reference).
 

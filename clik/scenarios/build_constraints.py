@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 from clik.constraints.constraint_set import ConstraintSet
 from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits, convert_override
+from clik.constraints.joint_thresholds import (
+    LOOKS_LIKE_DEGREES,
+    MAX_ANGLE_THRESHOLD,
+    degrees_hint,
+)
 from clik.constraints.kind import ConstraintKind
 from clik.constraints.obstacle import Obstacle
 from clik.constraints.registry import TABLE_KINDS
@@ -18,6 +24,7 @@ from clik.errors import (
     JointNotFound,
     ScenarioError,
 )
+from clik.model.joints import REVOLUTE
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
@@ -30,8 +37,10 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
 
     Joint-range rows (:class:`JointLimits`): ``threshold`` [rad] is the revolute
     joints' ``d_q`` and ``prismatic_threshold`` [m] the prismatic joints' (each
-    capped at a quarter of the joint's range); an override is read in the
-    table's ``unit`` for a revolute joint and in metres for a prismatic one.
+    capped at a quarter of the joint's range, with a warning); an override is read in the
+    table's ``unit`` for a revolute joint and in metres for a prismatic one. A
+    ``threshold`` in radians (no ``unit = "deg"``) that looks like degrees and is wider
+    than a revolute joint's whole range is refused, naming the joint (:func:`_check_radians`).
     The dexterity row (:class:`Dexterity`) keeps the task's manipulability above
     ``[constraints.dexterity] threshold``.
     """
@@ -54,29 +63,7 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
             raise ScenarioError(scenario.file, f"obstacles[{i}]", str(exc)) from None
     c = scenario.constraints
     obs, jl_spec, sc = c["obstacles"], c["joint_limits"], c["self_collision"]
-    joint_limits = None
-    if jl_spec["enabled"] or jl_spec["override"]:  # a bad override is an error even when off
-        try:
-            override = jl_spec["override"]
-            if "override_as_written" in jl_spec:  # parse_scenario's; older dicts: radians
-                override = convert_override(
-                    robot, jl_spec["override_as_written"], jl_spec.get("unit", "rad")
-                )
-            joint_limits = JointLimits(
-                robot,
-                jl_spec["threshold"],
-                override,
-                prismatic_threshold=jl_spec.get("prismatic_threshold"),
-            )
-        except JointNotFound as exc:
-            raise ScenarioError(
-                scenario.file, "constraints.joint_limits.override", str(exc)
-            ) from None
-        except InputError as exc:
-            message = str(exc).removeprefix(f"{exc.field}: ")  # the key is said once
-            raise ScenarioError(scenario.file, exc.field, message) from None
-        if not jl_spec["enabled"]:
-            joint_limits = None
+    joint_limits = _joint_limits(scenario, robot, jl_spec)
     dx_spec = c.get("dexterity") or {"enabled": False, "gain": None}
     kinds = _table_kinds(scenario, robot)
     release = obs["release"] or c["release"]
@@ -103,6 +90,67 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
         )
     except ClikError as exc:
         raise ScenarioError(scenario.file, "constraints", str(exc)) from None
+
+
+def _joint_limits(scenario: Scenario, robot: Robot, jl_spec: dict[str, Any]) -> JointLimits | None:
+    """The ``[constraints.joint_limits]`` rows, or None when not enabled.
+
+    A bad override is an error even when the rows are off.
+    """
+    if not (jl_spec["enabled"] or jl_spec["override"]):
+        return None
+    try:
+        override = jl_spec["override"]
+        if "override_as_written" in jl_spec:  # parse_scenario's; older dicts: radians
+            override = convert_override(
+                robot, jl_spec["override_as_written"], jl_spec.get("unit", "rad")
+            )
+        if jl_spec.get("unit", "rad") == "rad":
+            _check_radians(jl_spec["threshold"], robot, override)
+        elif jl_spec["threshold"] > MAX_ANGLE_THRESHOLD:  # written in degrees: no hint
+            raise InputError(
+                "constraints.joint_limits.threshold",
+                "an angle of at most 360 deg, smaller than a revolute joint's range",
+                f"{math.degrees(jl_spec['threshold']):g} deg",
+            )
+        joint_limits = JointLimits(
+            robot,
+            jl_spec["threshold"],
+            override,
+            prismatic_threshold=jl_spec.get("prismatic_threshold"),
+        )
+    except JointNotFound as exc:
+        raise ScenarioError(scenario.file, "constraints.joint_limits.override", str(exc)) from None
+    except InputError as exc:
+        message = str(exc).removeprefix(f"{exc.field}: ")  # the key is said once
+        raise ScenarioError(scenario.file, exc.field, message) from None
+    return joint_limits if jl_spec["enabled"] else None
+
+
+def _check_radians(threshold: float, robot: Robot, override: Any) -> None:
+    """Refuse a threshold [rad] wider than a revolute joint's range (degrees read as radians).
+
+    Such a threshold could only be capped (a quarter of the range), which leaves the rows
+    active over half the joint's range: ``threshold = 5.0`` meant as 5 deg is 286 deg.
+    Only one that looks like degrees (from :data:`LOOKS_LIKE_DEGREES` = 1 rad) is refused;
+    a smaller one is capped with a warning.
+
+    Raises:
+        InputError: ``constraints.joint_limits.threshold``, naming the joint.
+    """
+    if threshold < LOOKS_LIKE_DEGREES:
+        return
+    limits = JointLimits(robot, override=override, warn_cap=False)
+    for name, kind, lo, hi in zip(
+        limits.joint_names, limits.kinds, limits.lower, limits.upper, strict=True
+    ):
+        if kind == REVOLUTE and threshold > hi - lo:
+            raise InputError(
+                "constraints.joint_limits.threshold",
+                f"an angle [rad] smaller than {name}'s range ({hi - lo:.4g} rad)"
+                + degrees_hint(threshold),
+                threshold,
+            )
 
 
 def _dexterity(scenario: Scenario, spec: dict[str, Any]) -> Dexterity | None:

@@ -48,6 +48,7 @@ from clik.constraints import ConstraintSet
 from clik.constraints.kind import Violation
 from clik.constraints.pose_check import PoseCheck, constraint_label
 from clik.errors import InputError
+from clik.loop.start_checks import unchecked_starts
 from clik.loop.tracker import Tracker
 from clik.solving.solve_result import SolveResult
 from clik.tasks.task import Task
@@ -188,9 +189,10 @@ class _ConstrainedLaw:
         for _ in range(MAX_CHUNKS):
             if self.clip:  # a start must lie within the robot's limits
                 q = np.clip(q, self.lo, self.hi)
-            result = self.tracker.run(
-                self.hold, q, record_every=CHUNK_SAMPLES, deadlock_window=DEADLOCK_WINDOW
-            )
+            with unchecked_starts():  # the solve's own starts: no StartWarning
+                result = self.tracker.run(
+                    self.hold, q, record_every=CHUNK_SAMPLES, deadlock_window=DEADLOCK_WINDOW
+                )
             samples += result.steps
             q = np.array(result.q[-1])
             pos, rot = self.errors(q)

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clik.errors import InputError
+from clik.loop.start_checks import unchecked_starts
 from clik.loop.task_stack import TaskStack
 from clik.loop.tracker import ReachWarning, Tracker
 from clik.solving.solve_problem import SolveSettings, check_seed, check_settings
@@ -99,7 +100,7 @@ def solve_tasks(
     iterations, best = 0, (math.inf, q.copy(), math.inf, math.inf, "")
     start = time.perf_counter()
     for attempt in range(1, s["restarts"] + 2):
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), unchecked_starts():  # no StartWarning
             warnings.simplefilter("ignore", ReachWarning)
             n = s["max_iterations"]
             result = tracker.run(q0=q, settle=n * DT, record_every=n + 1)

@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -150,7 +151,25 @@ def _build(spec: ReachSpec) -> tuple[Robot, Task, ConstraintSet | None]:
 
 
 def solve_points(spec: ReachSpec, points: np.ndarray) -> dict[str, list[Any]]:
-    """Solve each point (the Dask task); returns the map's columns for these points."""
+    """Solve each point (the Dask task); returns the map's columns for these points.
+
+    Its warnings are returned too, under :data:`WARNINGS`, rather than printed by the worker.
+    """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = _solve_points(spec, points)
+    # a worker process's warnings would print there in Python's raw format, once per worker:
+    # they travel back with the columns and reach_map warns each distinct one once, here
+    out[WARNINGS] = list(dict.fromkeys((w.category, str(w.message)) for w in caught))
+    return out
+
+
+WARNINGS = "_warnings"
+"""Key of :func:`solve_points`'s answer holding its warnings, ``(category, message)`` pairs."""
+
+
+def _solve_points(spec: ReachSpec, points: np.ndarray) -> dict[str, list[Any]]:
+    """:func:`solve_points` without the warnings' bookkeeping."""
     import pinocchio as pin
 
     from clik.solving.solve_mode import solve
@@ -222,7 +241,10 @@ def reach_map(
     Raises:
         InputError, RobotLoadError, FrameNotFound, JointNotFound: see :func:`check_spec`.
     """
-    points = check_spec(spec)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        points = check_spec(spec)
+    shown = _rewarn([(w.category, str(w.message)) for w in caught], set())
     chunks = [points[i : i + CHUNK] for i in range(0, len(points), CHUNK)]
     bar = RunProgress(
         "reach", len(points), enabled=progress, unit="points", failed_label="unreachable"
@@ -236,8 +258,32 @@ def reach_map(
                 parts = _solve_chunks(own, spec, chunks, bar)
     finally:
         bar.close()
+    _rewarn([w for part in parts for w in part.get(WARNINGS, ())], shown)
     columns = {c: [v for part in parts for v in part[c]] for c in (*COLUMNS, BLOCKED)}
     return ReachMap.from_columns(spec, columns, time.perf_counter() - start)
+
+
+def _rewarn(found: Sequence[tuple[type[Warning], str]], shown: set[str]) -> set[str]:
+    """Warn each distinct ``(category, message)`` of ``found`` not yet in ``shown``, once.
+
+    Returns:
+        ``shown`` with the messages warned here added.
+    """
+    for category, message in found:
+        if message not in shown:
+            shown.add(message)
+            warnings.warn(_warning(category, message), stacklevel=3)
+    return shown
+
+
+def _warning(category: type[Warning], message: str) -> Warning:
+    """A ``category`` warning saying ``message``, also when its constructor takes more."""
+    try:
+        return category(message)
+    except TypeError:  # MimicJointWarning(message, joints), ...: its data stayed on the worker
+        warning = Warning.__new__(category)
+        Warning.__init__(warning, message)
+        return warning
 
 
 def _solve_chunks(

@@ -11,7 +11,8 @@ A sweep file is TOML::
     [vary."solver.gain"]
     values = [500.0, 1000.0]
 
-Each ``[vary."<key path>"]`` table holds exactly one of:
+Each ``[vary."<key path>"]`` table holds exactly one of (a plain list,
+``"solver.gain" = [500.0, 1000.0]`` under ``[vary]``, is read as ``values``):
 
 - ``values = [...]``: the values, as the scenario file would hold them;
 - ``grid = { start, stop, num }``: evenly spaced values from ``start`` to
@@ -164,24 +165,48 @@ def _read_toml(path: Path) -> dict[str, Any]:
         raise ScenarioError(path, "", f"not valid TOML ({exc})") from None
 
 
-def resolve_base(file: Path, base: str) -> Path:
-    """The base scenario file: relative to the sweep file's folder, else a shipped scenario."""
+def locate_scenario(text: str, folder: Path) -> Path | None:
+    """A scenario file named on the command line or by a sweep's ``base``, or None.
+
+    The one lookup ``clik solve NAME`` and a sweep's ``base`` share: a file
+    (relative to ``folder``), else a shipped scenario (``clik/scenarios/NAME.toml``;
+    ``NAME`` with or without ``.toml``, no ``/``).
+
+    Args:
+        text: The path or name as written.
+        folder: The folder a relative path is relative to.
+    """
     from clik.scenarios import scenario_path
 
-    candidate = Path(base).expanduser()
+    candidate = Path(text).expanduser()
     if not candidate.is_absolute():
-        candidate = file.parent / candidate
+        candidate = folder / candidate
     if candidate.is_file():
         return candidate
-    shipped = scenario_path(base[:-5] if base.endswith(".toml") else base)
-    if "/" not in base and shipped.is_file():
+    shipped = scenario_path(text[:-5] if text.endswith(".toml") else text)
+    if "/" not in text and shipped.is_file():
         return shipped
-    names = sorted(p.stem for p in shipped.parent.glob("*.toml"))
+    return None
+
+
+def shipped_scenarios() -> list[str]:
+    """The names of the shipped scenarios (``clik/scenarios/*.toml``, without ``.toml``)."""
+    from clik.scenarios import scenario_path
+
+    return sorted(p.stem for p in scenario_path("x").parent.glob("*.toml"))
+
+
+def resolve_base(file: Path, base: str) -> Path:
+    """The base scenario file: relative to the sweep file's folder, else a shipped scenario."""
+    found = locate_scenario(base, file.parent)
+    if found is not None:
+        return found
+    candidate = file.parent / Path(base).expanduser()
     raise ScenarioError(
         file,
         "base",
         f"no scenario file {str(candidate)!r} and no shipped scenario {base!r}; "
-        f"shipped: {', '.join(names)}",
+        f"shipped: {', '.join(shipped_scenarios())}",
     )
 
 
@@ -245,8 +270,15 @@ def _tidy(value: float) -> float:
 
 def _vary(file: Path, path: str, value: Any, seed: int) -> Vary:
     where = f'vary."{path}"'
+    if isinstance(value, list):  # `"solver.gain" = [500.0, 1000.0]`: the values themselves
+        value = {"values": value}
     if not isinstance(value, dict):
-        raise ScenarioError(file, where, f"expected a table with one of {', '.join(KINDS)}")
+        raise ScenarioError(
+            file,
+            where,
+            f"expected a list of values, or a table with one of {', '.join(KINDS)} "
+            "(values = [...] lists them)",
+        )
     table = Table(value, file, where)
     given = [k for k in KINDS if k in value]
     if len(given) != 1:

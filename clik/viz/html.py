@@ -3,9 +3,11 @@
 The file inlines meshcat's viewer (``meshcat/viewer/dist/main.min.js``) and
 the scene's commands, each packed with msgpack as the viewer's websocket
 would deliver it, base64-encoded. A small script decodes and applies them in
-order, synchronously, then sets ``window.clikSceneReady = true`` (tests wait
-for it). The commands are recorded by a stand-in for meshcat's window object
-(:class:`Recorder`), so nothing listens on any port.
+order, synchronously, opens meshcat's controls panel and its Animations
+folder (the play controls in view, not behind "Open Controls"), then sets
+``window.clikSceneReady = true`` (tests wait for it). The commands are
+recorded by a stand-in for meshcat's window object (:class:`Recorder`), so
+nothing listens on any port.
 """
 
 from __future__ import annotations
@@ -104,6 +106,9 @@ var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
     for (var j = 0; j < text.length; j++) {{ bytes[j] = text.charCodeAt(j); }}
     viewer.handle_command_bytearray(bytes);
   }}
+  // the play controls in view: meshcat starts with its panel closed ("Open Controls")
+  viewer.gui.open();
+  if (viewer.animator && viewer.animator.folder) {{ viewer.animator.folder.open(); }}
   window.clikSceneReady = true;
 }})();
 </script>

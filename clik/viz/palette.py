@@ -56,6 +56,48 @@ LEGEND = (
 )
 """``(colour, label)`` of each element of the tracking scene's legend (the HTML caption)."""
 
+ROBOT_NEUTRAL = (0.6, 0.6, 0.6)
+"""Grey a robot link is drawn in when its own colour is close to a legend colour."""
+
+
+def _lab(rgb: tuple[float, float, float]) -> tuple[float, float, float]:
+    """CIELAB (D65) of an sRGB colour in [0, 1]."""
+
+    def linear(c: float) -> float:
+        return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+
+    r, g, b = (linear(c) for c in rgb)
+    xyz = (
+        (0.4124 * r + 0.3576 * g + 0.1805 * b) / 0.95047,
+        0.2126 * r + 0.7152 * g + 0.0722 * b,
+        (0.0193 * r + 0.1192 * g + 0.9505 * b) / 1.08883,
+    )
+    fx, fy, fz = (t ** (1 / 3) if t > 0.008856 else 7.787 * t + 16 / 116 for t in xyz)
+    return 116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz)
+
+
+def distance(a: tuple[float, float, float], b: tuple[float, float, float]) -> float:
+    """CIELAB distance (CIE76) between two sRGB colours in [0, 1]."""
+    la, lb = _lab(a), _lab(b)
+    return sum((x - y) ** 2 for x, y in zip(la, lb, strict=True)) ** 0.5
+
+
+LEGEND_DISTANCE = 25.0
+"""Smallest CIELAB distance between a robot link's drawn colour and any legend colour."""
+
+
+def link_color(rgb: tuple[float, float, float]) -> tuple[float, float, float]:
+    """The colour a robot link is drawn in: its own, unless a legend colour is near it.
+
+    The legend's colours mean states (reference, closest link inside threshold,
+    active row, ...): a link coloured like one would read as that state, so it is
+    drawn in :data:`ROBOT_NEUTRAL` instead.
+    """
+    if all(distance(rgb, c) >= LEGEND_DISTANCE for c, _ in LEGEND):
+        return rgb
+    return ROBOT_NEUTRAL
+
+
 TASKS = (
     (0.85, 0.2, 0.45),
     (0.6, 0.9, 0.2),

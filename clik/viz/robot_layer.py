@@ -113,7 +113,7 @@ def robot_commands(
         used.add(f"{go.parentJoint}/{name}")
         path = f"{joint_path(model, go.parentJoint)}/{name}"
         rgba = np.asarray(go.meshColor, dtype=float)
-        rgb = (float(rgba[0]), float(rgba[1]), float(rgba[2]))
+        rgb = palette.link_color((float(rgba[0]), float(rgba[1]), float(rgba[2])))
         material = phong_material(rgb, opacity=float(rgba[3]), flat=shape.is_mesh)
         commands.append(
             set_object(path, scene_object("Mesh", shape.geometry, material, shape.matrix, go.name))

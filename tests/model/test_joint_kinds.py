@@ -201,17 +201,17 @@ def test_panda_follower_finger_is_locked_with_a_warning():
         panda = Robot.load("panda")
     (warning,) = [w for w in caught if issubclass(w.category, MimicJointWarning)]
     assert FOLLOWER in str(warning.message) and FINGER in str(warning.message)
-    assert warning.message.joints == {FOLLOWER: (FINGER, 0.001)}
+    assert warning.message.joints == {FOLLOWER: (FINGER, 0.02)}
     assert FOLLOWER not in panda.joint_names and FINGER in panda.joint_names
     assert (panda.nq, panda.nv) == (8, 8)
-    assert panda.locked == {FOLLOWER: 0.001}  # multiplier 1 x the leader's reference 0.001
+    assert panda.locked == {FOLLOWER: 0.02}  # multiplier 1 x the leader's reference 0.02
     assert panda.mimics[FOLLOWER].leader == FINGER
-    # the locked follower sits where the full model puts it for finger2 = 0.001
+    # the locked follower sits where the full model puts it for finger2 = 0.02
     full = pin.buildModelFromUrdf(str(panda.source_path))
     q = panda.q_reference
     q[7] = 0.03
     offset = right_finger_offset(panda.model, q)
-    np.testing.assert_allclose(offset, right_finger_offset(full, np.r_[q, 0.001]), atol=1e-12)
+    np.testing.assert_allclose(offset, right_finger_offset(full, np.r_[q, 0.02]), atol=1e-12)
     assert not np.allclose(offset, right_finger_offset(full, np.r_[q, 0.03]), atol=1e-3)
 
 
@@ -233,9 +233,9 @@ def test_follower_stays_put_along_a_tracked_run(panda8):
     assert result.status == "completed"
     assert_within_limits(result, panda8)
     assert np.ptp(result.q[:, 3]) > 0.01  # the arm moved
-    full = pin.buildModelFromUrdf(str(panda8.source_path))  # finger 2 free, set to 0.001
+    full = pin.buildModelFromUrdf(str(panda8.source_path))  # finger 2 free, set to 0.02
     for q in result.q[:: max(1, len(result.q) // 10)]:
-        expected = right_finger_offset(full, np.r_[q, 0.001])
+        expected = right_finger_offset(full, np.r_[q, 0.02])
         np.testing.assert_allclose(right_finger_offset(panda8.model, q), expected, atol=1e-12)
 
 
