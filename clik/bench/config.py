@@ -18,6 +18,7 @@ class BenchConfig:
         case_study_rounds: Repeats of the eight case-study runs.
         memory_samples: Samples of the planar run whose peak RSS is measured.
         memory_record_every: Decimation of the memory run's decimated variant.
+        session_ticks: Ticks of the controller session whose memory is measured.
         sweep_runs: Runs of the timed sweep (enough that the sweep's fixed costs, submission
             and the final write, weigh little against the steady rate).
         sweep_repeats: Alternations of the 1- and 2-worker sweeps (median taken).
@@ -34,6 +35,7 @@ class BenchConfig:
     case_study_rounds: int = 5
     memory_samples: int = 1_000_000
     memory_record_every: int = 1000
+    session_ticks: int = 1_000_000
     sweep_runs: int = 360
     sweep_repeats: int = 3
     seed: int = 6
@@ -51,6 +53,7 @@ QUICK = BenchConfig(
     case_study_rounds=1,
     memory_samples=5_000,
     memory_record_every=100,
+    session_ticks=3_000,
     sweep_runs=4,
     sweep_repeats=1,
     zoo_robots=("planar4r", "double_pendulum_simple", "finger_edu", "ur5", "panda"),

@@ -157,11 +157,12 @@ def case_memory_section(report: dict[str, Any]) -> list[str]:
     Args:
         report: The report.
     """
-    cs, mem, run, sweep = (
+    cs, mem, run, sweep, session = (
         report["case_study"],
         report["memory"],
         report["panda_obstacles_run"],
         report["sweep"],
+        report["controller_session"],
     )
     return [
         "",
@@ -182,6 +183,9 @@ def case_memory_section(report: dict[str, Any]) -> list[str]:
         f"{mem['full']['growth_mb']:.1f} |",
         f"| memory growth, {mem['decimated']['samples']} samples, record_every = "
         f"{mem['decimated']['record_every']} [MB] | {mem['decimated']['growth_mb']:.1f} |",
+        f"| controller session, {session['ticks']} ticks, {session['events']} events: memory "
+        f"growth after 10 % [MB], result() [ms] | {session['growth_after_10pct_mb']:.2f}, "
+        f"{session['result_ms']:.1f} |",
         "",
         f"| sweep, {sweep['runs']} runs, local Dask cluster [runs/s]: 1 worker, "
         f"2 workers, speed-up | {sweep['runs_per_s_1_worker']:.2f}, "

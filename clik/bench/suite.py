@@ -21,6 +21,7 @@ from clik.bench.memory import bench_memory
 from clik.bench.mink_backend import Mink, find_mink
 from clik.bench.pink_backend import Pink, find_pink
 from clik.bench.report import markdown
+from clik.bench.session_memory import bench_session
 from clik.bench.solve import bench_solve
 from clik.bench.stats import ratio
 from clik.bench.step import bench_steps
@@ -51,6 +52,8 @@ REQUIRED_KEYS = (
     "case_study_all_runs_s",
     "memory_growth_mb.decimated",
     "memory_growth_mb.full",
+    "memory_growth_mb.controller_session",
+    "controller_session.result_ms",
     "sweep_runs_per_s.1_worker",
     "sweep_runs_per_s.2_workers",
     *(f"tick_us.{line}" for line in TICK_LINES),
@@ -99,6 +102,8 @@ class Measured:
         sweep: Sweep (:func:`~clik.bench.sweep_rate.bench_sweep`).
         zoo: The zoo's obstacle run (:func:`~clik.bench.step_zoo.bench_zoo`).
         ticks: Per tick line (:func:`~clik.bench.tick.bench_ticks`).
+        session: A long controller session's memory
+            (:func:`~clik.bench.session_memory.bench_session`).
     """
 
     steps: dict[str, Any]
@@ -108,6 +113,7 @@ class Measured:
     sweep: dict[str, Any]
     zoo: dict[str, Any]
     ticks: dict[str, Any]
+    session: dict[str, Any]
 
 
 def measure(config: BenchConfig, pink: Pink | None, mink: Mink | None, say: Log) -> Measured:
@@ -131,9 +137,11 @@ def measure(config: BenchConfig, pink: Pink | None, mink: Mink | None, say: Log)
     case = bench_case_study(config, say)
     say("memory (two subprocesses)")
     memory = bench_memory(config, say)
+    say("memory of a controller session with events at every tick (a subprocess)")
+    session = bench_session(config, say)
     say("sweep on a local Dask cluster, 1 and 2 workers")
     sweep = bench_sweep(config, say)
-    return Measured(steps, solve, case, memory, sweep, zoo, ticks)
+    return Measured(steps, solve, case, memory, sweep, zoo, ticks, session)
 
 
 def step_ratios(m: Measured) -> dict[str, Any]:
@@ -228,8 +236,10 @@ def figures(config: BenchConfig, m: Measured) -> dict[str, Any]:
         "memory_growth_mb": {
             "full": m.memory["full"]["growth_mb"],
             "decimated": m.memory["decimated"]["growth_mb"],
+            "controller_session": m.session["growth_after_10pct_mb"],
         },
         "memory": m.memory,
+        "controller_session": m.session,
         "sweep_runs_per_s": {
             "1_worker": m.sweep["runs_per_s_1_worker"],
             "2_workers": m.sweep["runs_per_s_2_workers"],

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from clik.constraints.event_log import EventLog
 from clik.constraints.kind import Candidate, KindRun, RunSetup, Sample
 from clik.outputs.ring import unrolled
 from clik.tasks.extended_task import ExtendedTask
@@ -64,6 +65,7 @@ class ConstraintRun:
             extended task's first rows, which the kinds read as "the task".
         data: The run's Pinocchio data, where the loop computes the kinematics the rows
             read; None: a new one.
+        events: The events kept (the last ones; 0: every one): a controller's session.
 
     The run reads ``cset`` as it is now (its kinds, scene and settings; a change to the
     set, such as :meth:`~clik.constraints.ConstraintSet.set_obstacles`, applies to the
@@ -85,6 +87,7 @@ class ConstraintRun:
         frame_id: int = -1,
         task_rows: np.ndarray | None = None,
         data: pin.Data | None = None,
+        events: int = 0,
     ) -> None:
         self.frame_id = frame_id
         self.task_rows = np.arange(m) if task_rows is None else np.asarray(task_rows, np.intp)
@@ -108,7 +111,10 @@ class ConstraintRun:
         self._qdot = np.zeros(self.robot.nv)
         self.active: list[Candidate] = []
         self._skipped: set[str] = set()
-        self.events: list[dict[str, Any]] = []
+        self._ever_skipped: set[str] = set()
+        self.events = EventLog(events)
+        self.sample_events: list[dict[str, Any]] = []
+        """The events of the last :meth:`update` (a controller's tick: all of them)."""
         self.codes: dict[str, int] = {}
         slots = max(self.limit, 1)
         self.rec_active = np.full((n_rec, slots), -1, dtype=np.int32)
@@ -138,6 +144,7 @@ class ConstraintRun:
             ``v``, the number of active constraint rows.
         """
         tk = float(self.t[k])
+        self.sample_events = []
         dq_abs = None
         if self._q_prev is not None:  # |dq| since the last sample, for the certificates
             dq = pin.difference(self.robot.model, self._q_prev, q)
@@ -236,7 +243,11 @@ class ConstraintRun:
         return v
 
     def _event(self, tk: float, key: str, action: str) -> None:
-        self.events.append({"t": round(tk, 9), "constraint": key, "action": action})
+        if action == "skipped":
+            self._ever_skipped.add(key)
+        event = {"t": round(tk, 9), "constraint": key, "action": action}
+        self.events.append(event)
+        self.sample_events.append(event)
 
     # -- limits and records ------------------------------------------------------------
 
@@ -279,12 +290,13 @@ class ConstraintRun:
 
     def skipped_names(self) -> list[str]:
         """Constraints that were violated but found no free row, in the order met."""
-        return sorted({e["constraint"] for e in self.events if e["action"] == "skipped"})
+        return sorted(self._ever_skipped)
 
     def records(self, n_rec: int) -> dict[str, Any]:
         """The run's records, with the keys the compiled engine returns."""
         return {
             "events": list(self.events),
+            "events_dropped": self.events.dropped,
             "constraint_names": sorted(self.codes, key=self.codes.__getitem__),
             "active": self.rec_active,
             "witness": self.rec_witness,
@@ -313,10 +325,16 @@ def finish_constraints(
         ring: ``(kept, capacity)`` of a ring record (a controller's): its per-sample
             arrays are unrolled, oldest first, and ``n_rec`` is what it holds.
     """
-    if ring is not None:
-        records = unrolled(records, *ring)
+    if ring is not None:  # the per-sample arrays, oldest first (not per-obstacle ones)
+        kinds = [
+            {key: unrolled(v, *ring) if key in kind.per_sample else v for key, v in kr.items()}
+            for kind, kr in zip(cset.kinds, records["kinds"], strict=True)
+        ]
+        active, witness = unrolled(records["active"], *ring), unrolled(records["witness"], *ring)
+        records = {**records, "active": active, "witness": witness, "kinds": kinds}
         n_rec = min(ring)
     result.events = list(records["events"])
+    result.events_dropped = int(records["events_dropped"])
     result.info["constraint_names"] = list(records["constraint_names"])
     result.info["links"] = cset.link_labels
     result.extra["active"] = records["active"][:n_rec]

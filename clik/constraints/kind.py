@@ -257,10 +257,14 @@ class ConstraintKind(ABC):
             constraint), or None for the kinds with their own ``[constraints.*]`` table.
         gain: The rows' gain [1/s]; None: the law's default (see
             :class:`clik.constraints.ConstraintSet`).
+        per_sample: The keys of its run's records (:meth:`KindRun.records`) whose first
+            axis is the recorded samples (a controller's ring unrolls them); the others
+            are the run's (per obstacle, ...).
     """
 
     name: ClassVar[str]
     table: ClassVar[str | None] = None
+    per_sample: ClassVar[tuple[str, ...]] = ()
     _gain: float | None = None
 
     @property

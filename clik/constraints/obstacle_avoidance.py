@@ -59,6 +59,7 @@ class ObstacleAvoidance(ConstraintKind):
     """
 
     name = "obstacle"
+    per_sample = ("obstacle_distance", "obstacle_link")
 
     def __init__(
         self,

@@ -11,22 +11,22 @@ of them.
 
 from __future__ import annotations
 
-import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from typing import Any
-from weakref import WeakMethod
 
 import numpy as np
 
 from clik.constraints.constraint_set import ConstraintSet
 from clik.constraints.obstacle import Obstacle
-from clik.control.targets import by_name, one_sample
+from clik.control.targets import as_floats, as_mapping
 from clik.control.tick import Tick
-from clik.control.ticks import CompiledTicks, PythonTicks
+from clik.control.ticks import PythonTicks, Session
+from clik.engine import load
 from clik.errors import InputError
+from clik.loop.compiled_run import engine_run
 from clik.loop.joint_speed import JointSpeed
 from clik.loop.laws import LawName
-from clik.loop.reference_stream import rows_at_rest, task_reference
 from clik.loop.stop_checks import checked_settings
 from clik.loop.tracker import JOINT_SPEED, Tracker
 from clik.loop.tracking import _Run
@@ -40,7 +40,8 @@ from clik.trajectory.clock import Clock
 RECORD_SIZE = 10_000
 """Samples a controller's record keeps by default (the last ones: a ring)."""
 
-_RANK = {"diverged": 4, "deadlock": 3, "violated": 2, "off_track": 1, "ok": 0}
+EVENT_SIZE = 10_000
+"""Constraint events a controller keeps by default (the last ones; the others counted)."""
 
 
 class Controller:
@@ -61,6 +62,8 @@ class Controller:
         q0: The first joints (default: the robot's reference configuration).
         record_every: Keep every k-th tick in the record, an integer >= 1.
         record_size: Ticks the record keeps (the last ones), an integer >= 1.
+        event_size: Constraint events the controller keeps (the last ones, the others
+            counted in the result's ``events_dropped``), an integer >= 1.
         tolerance: Position [m] and orientation [rad] tolerance of the ``off_track``
             verdict, which fires after ``settling_time`` [s] above it in one stretch.
         **checks: The stop checks' settings, as ``Tracker.run`` takes them
@@ -70,6 +73,12 @@ class Controller:
     Raises:
         InputError: A bad setting (named), as ``clik.Tracker`` and ``Tracker.run`` refuse it.
         InfeasibleError: ``q0`` outside the robot's joint limits.
+
+    One controller, one thread at a time: :meth:`step`, :meth:`reset`, :meth:`result`
+    and :meth:`move_obstacle` called from several threads wait for each other (each runs
+    whole); called from inside one of them in the same thread (a target's ``__array__``,
+    a garbage-collection callback), they raise :class:`~clik.errors.InputError`. A tick,
+    once returned, is its own: it may be read from any thread.
 
     Example:
         >>> ctl = clik.Controller(task, law="pseudoinverse", gain=100, q0=q0)
@@ -94,6 +103,7 @@ class Controller:
         q0: np.ndarray | Sequence[float] | None = None,
         record_every: int = 1,
         record_size: int = RECORD_SIZE,
+        event_size: int = EVENT_SIZE,
         tolerance: tuple[float, float] = DEFAULT_TOLERANCE,
         settling_time: float = DEFAULT_SETTLING_TIME,
         **checks: float,
@@ -115,10 +125,38 @@ class Controller:
         self.tolerance = checked_tolerance(tolerance, settling_time)
         self.record_every = _count(record_every, "record_every")
         self.record_size = _count(record_size, "record_size")
+        self.event_size = _count(event_size, "event_size")
         self.names: list[str] = ["task"] if tr.stack is None else list(tr.stack.names)
         """The tasks' names, in order (the keys of the targets and of ``Tick.errors``)."""
-        self._tasks = [tr.task] if tr.stack is None else [g.task for g in tr.stack.goals]
+        tasks_ = [tr.task] if tr.stack is None else [g.task for g in tr.stack.goals]
+        engine_ = load()
+        self._turn = engine_.Turn(InputError)
+        if tr.engine == "python":
+            self._ticks: Any = PythonTicks(
+                self._turn, self.names, [t.tick_target() for t in tasks_]
+            )
+        else:
+            Tick.register(engine_.Tick)  # the compiled engine's ticks are Ticks
+            tol = self.tolerance
+            self._ticks = engine_.Ticker(
+                turn=self._turn, refuse=InputError, convert=as_floats, as_mapping=as_mapping,
+                check_model=self.robot.check_model, names=self.names,
+                tol_position=tol.position, tol_orientation=tol.orientation,
+                settling_time=tol.settling_time,
+            )  # fmt: skip
+        self._tick = self._ticks.step  # step's call (bound once: it runs at every tick)
+        self._session: Session
+        self._current: dict[str, Obstacle] = {}  # the obstacles moved in this session
         self.reset(q0)
+
+    @contextmanager
+    def _held(self, who: str) -> Iterator[None]:
+        """The controller's turn for ``who`` (one thread at a time)."""
+        self._turn.take(who)
+        try:
+            yield
+        finally:
+            self._turn.give()
 
     def reset(self, q: np.ndarray | Sequence[float] | None = None) -> None:
         """Start a new session at ``q`` (default: the robot's reference configuration).
@@ -130,38 +168,33 @@ class Controller:
             InfeasibleError: ``q`` outside the robot's joint limits.
         """
         robot, tr = self.robot, self.tracker
-        robot.check_model()
-        q0 = robot.check_configuration(robot.q_reference if q is None else q, "q")
-        robot.check_within_limits(q0, "q")
-        tr._warn_stability(q0)
-        self._run = _Run(
-            tr, Clock(self.dt), None, self.record_every, self.settings, None, self.tolerance,
-            q0, ring=self.record_size,
-        )  # fmt: skip
-        ticks = PythonTicks if tr.engine == "python" else CompiledTicks
-        self._ticks = ticks(self._run, q0)
-        self.__dict__.pop("step", None)
-        if isinstance(self._ticks, CompiledTicks) and tr.stack is None:
-            # the fast path: step() is the engine's own call, which hands anything but a
-            # one-task float64 target to _general_step (the method below)
-            ticker = self._ticks.ticker
-            ticker.serving(WeakMethod(self._general_step), WeakMethod(self._tick_verdict))
-            self.step = ticker.serve  # type: ignore[method-assign]
-        self._worst: tuple[str, str] = ("ok", "")
-        self._wall = 0.0
-        self._current: dict[str, Obstacle] = {}  # the obstacles moved in this session
-        self._previous: tuple[np.ndarray | None, ...] | None = None  # a packed tick's
-        self._previous_k = -1  # ... and its index (a tick of the engine's fast path between)
+        with self._held("Controller.reset"):
+            robot.check_model()
+            q0 = robot.check_configuration(robot.q_reference if q is None else q, "q")
+            robot.check_within_limits(q0, "q")
+            tr._warn_stability(q0)
+            run = _Run(
+                tr, Clock(self.dt), None, self.record_every, self.settings, None,
+                self.tolerance, q0, ring=self.record_size, events=self.event_size,
+            )  # fmt: skip
+            if tr.engine == "python":
+                self._session = Session(run)
+                self._ticks.restart(run, q0, self._session)
+            else:
+                native = engine_run(run)
+                self._session = Session(run, native)
+                self._ticks.restart(native, np.array(q0, dtype=float), self._session.explain)
+            self._current = {}
 
     @property
     def k(self) -> int:
         """The next tick's index (its time is ``k dt``)."""
-        return self._ticks.k
+        return int(self._ticks.k)
 
     @property
     def q(self) -> np.ndarray:
         """The joints the next tick starts from (a copy)."""
-        return self._ticks.q.copy()
+        return np.array(self._ticks.q, dtype=float)
 
     def move_obstacle(
         self,
@@ -180,14 +213,19 @@ class Controller:
         Raises:
             InputError: No obstacle so named, or not three finite numbers.
         """
-        cset = self._run.cset
+        with self._held("Controller.move_obstacle"):
+            self._move_one(name, position, rpy, velocity)
+
+    def _move_one(self, name: str, position: Any, rpy: Any, velocity: Any) -> None:
+        """:meth:`move_obstacle`, the turn held."""
+        cset = self._session.run.cset
         names = [] if cset is None else [o.name for o in cset.obstacles]
         if name not in names:
             raise InputError("obstacles", f"an obstacle's name, one of {names}", name)
         current = self._current.get(name, cset.obstacles[names.index(name)])  # type: ignore[union-attr]
         obstacle = current.moved(position, rpy, (0.0, 0.0, 0.0) if velocity is None else velocity)
         self._current[name] = obstacle
-        self._ticks.move_obstacle(obstacle, obstacle.position, self._run.t[self.k])
+        self._session.move_obstacle(obstacle, obstacle.position, self._session.run.t[self.k])
 
     def step(self, targets: Any, velocities: Any = None, obstacles: Any = None) -> Tick:
         """One tick: this tick's targets in, the next joints and a verdict out.
@@ -197,40 +235,36 @@ class Controller:
                 else a mapping ``{name: target}`` (every task). A frame task's target is
                 a ``pin.SE3`` or a 4x4 pose (a position (3,) for a position task, a
                 rotation (3, 3) for an orientation task), a centre of mass's a position
-                (3,) [m], a posture's its joints' values [rad or m].
+                (3,) [m], a posture's its joints' values [rad or m]. A NumPy float64
+                array is read as it is; anything else (other dtypes, layouts, lists) is
+                converted once.
             velocities: Optionally, the targets' velocities (feed-forward ``xdot_d`` of
                 (10)), alike: a frame task's ``(linear, angular)`` (6,) [m/s, rad/s]
                 (or (3,) for a position or orientation task), a centre of mass's (3,),
                 a posture's per joint. None (or a task left out): zero feed-forward,
                 and the stall check takes the reference as at rest only while every
                 target stays where it was at the previous tick.
-
             obstacles: Obstacles that moved, by name: a position (3,) [m] (then at rest)
                 or ``(position, velocity)`` [m, m/s]; as :meth:`move_obstacle`, from this
                 tick on.
 
         Returns:
             The tick (:class:`~clik.control.tick.Tick`): ``q`` to command, ``qdot``,
-            events, active rows, errors and the verdict.
+            events, active rows, errors and the verdict; its arrays are its own.
 
         Raises:
-            InputError: A missing or malformed target or velocity (named).
+            InputError: A missing or malformed target, velocity or obstacle (named); the
+                robot's model changed; a call from inside another of this controller's
+                calls in the same thread (one thread at a time).
         """
-        if obstacles is not None:
+        if obstacles is None:
+            return self._tick(targets, velocities)  # type: ignore[no-any-return]
+        with self._held("Controller.step"):
             self._move(obstacles)
-        return self._step(targets, velocities)
-
-    _general_step = step  # the fast path's fallback (the engine's Ticker.serve calls it)
-
-    def _tick_verdict(self, tick: Any) -> None:
-        """A fast-path tick's verdict other than ok: its reason, kept if the worst."""
-        ticks: Any = self._ticks  # CompiledTicks
-        verdict, reason = ticks.verdict_of(tick.code, tick.t)
-        tick.reason = reason
-        self._note(verdict, reason)
+            return self._ticks.step(targets, velocities, True)  # type: ignore[no-any-return]
 
     def _move(self, obstacles: Any) -> None:
-        """:meth:`step`'s ``obstacles``: each moved, from this tick on."""
+        """:meth:`step`'s ``obstacles``: each moved, from this tick on (the turn held)."""
         if not isinstance(obstacles, Mapping):
             raise InputError(
                 "obstacles",
@@ -240,93 +274,25 @@ class Controller:
         for name, value in obstacles.items():
             pair = isinstance(value, tuple) and len(value) == 2
             position, velocity = value if pair else (value, None)
-            self.move_obstacle(name, position, velocity=velocity)
-
-    def _step(self, targets: Any, velocities: Any) -> Tick:
-        """:meth:`step` with the targets packed in Python (any tasks, any form)."""
-        start = time.perf_counter()
-        k, ticks = self.k, self._ticks
-        tk = self._run.t[k]
-        refs = self._references(targets, velocities, tk)
-        verdict, reason = ticks.tick(k, refs)
-        self._note(verdict, reason)
-        events = ticks.new_events()
-        errors = dict(zip(self.names, ticks.errors(), strict=True))
-        self._wall += time.perf_counter() - start
-        return Tick(
-            q=ticks.q.copy(), qdot=ticks.qdot, t=tk, k=k, verdict=verdict, reason=reason,
-            events=events, active=ticks.active(), errors=errors,
-        )  # fmt: skip
-
-    def _note(self, verdict: str, reason: str) -> None:
-        """Keep the session's worst verdict (its result's status)."""
-        if _RANK[verdict] > _RANK[self._worst[0]]:
-            self._worst = (verdict, reason)
-
-    def _references(self, targets: Any, velocities: Any, tk: float) -> tuple[Any, ...]:
-        """This tick's references as the loop reads them (one-sample arrays)."""
-        given = by_name(targets, self.names, "targets")
-        missing = [n for n in self.names if n not in given]
-        if missing:
-            raise InputError("targets", f"a target for every task ({', '.join(self.names)})")
-        speeds = {} if velocities is None else by_name(velocities, self.names, "velocities")
-        samples = [
-            one_sample(task, given[name], speeds.get(name), tk, name)
-            for task, name in zip(self._tasks, self.names, strict=True)
-        ]
-        P_d, R_d, FF = task_reference(self.tracker.task, samples[0])
-        at_rest = rows_at_rest(FF)
-        g_ref = g_ff = None
-        if len(samples) > 1:
-            arrays = [
-                t.reference_arrays(s) for t, s in zip(self._tasks[1:], samples[1:], strict=True)
-            ]
-            g_ref = np.ascontiguousarray(np.concatenate([a for a, _ in arrays], axis=1))
-            g_ff = np.ascontiguousarray(np.concatenate([b for _, b in arrays], axis=1))
-            at_rest = at_rest & rows_at_rest(g_ff)
-        P_d = None if P_d is None else np.ascontiguousarray(P_d)
-        R_d = None if R_d is None else np.ascontiguousarray(R_d)
-        task = self.tracker.task
-        refs = (P_d if task.has_position else None, R_d if task.has_orientation else None, g_ref)
-        if len(speeds) < len(self.names):  # a velocity not given: at rest only if unmoved
-            at_rest = at_rest & self._unmoved(refs)
-        self._previous, self._previous_k = refs, self.k
-        return P_d, R_d, np.ascontiguousarray(FF), at_rest, g_ref, g_ff
-
-    def _unmoved(self, refs: tuple[np.ndarray | None, ...]) -> bool:
-        """Whether every target is the previous tick's (the stall check's "at rest").
-
-        With every velocity given, the reference is at rest where they are all zero, as
-        offline; a target given without its velocity may move with a zero feed-forward,
-        so it counts as at rest only while it stays where it was.
-        """
-        before = self._previous
-        return (
-            before is not None
-            and self._previous_k == self.k - 1
-            and all(
-                (a is None and b is None)
-                or (a is not None and b is not None and np.array_equal(a, b))
-                for a, b in zip(refs, before, strict=True)
-            )
-        )
+            self._move_one(name, position, None, velocity)
 
     def result(self) -> TrackingResult:
         """The session so far as a :class:`~clik.outputs.result.TrackingResult`.
 
-        Its arrays hold the record's ticks (the last ``record_size`` kept); its events,
-        violations and task errors the whole session's. Its status is the worst
-        verdict of the session (``completed`` when every tick was ``ok``), judged as an
-        offline run's (limits crossed, tolerance, joint speeds).
+        Its arrays hold the record's ticks (the last ``record_size`` kept); its events
+        the last ``event_size`` (``events_dropped`` counts the others); its violations
+        and task errors the whole session's. Its status is the worst verdict of the
+        session (``completed`` when every tick was ``ok``), judged as an offline run's
+        (limits crossed, tolerance, joint speeds).
         """
-        self._ticks.sync()
-        status, reason = self._worst
-        if status in ("ok", "violated", "off_track"):  # judged below, as an offline run
-            status = "completed"
-            reason = f"ran {self.k} ticks ({max(self.k - 1, 0) * self.dt:.6g} s)"
-        ticks: Any = self._ticks
-        wall = ticks.ticker.wall if isinstance(ticks, CompiledTicks) else self._wall
-        return self._run.finished(status, reason, wall)
+        with self._held("Controller.result"):
+            session = self._session
+            session.sync()
+            status, reason = session.worst
+            if status in ("ok", "violated", "off_track"):  # judged below, as an offline run
+                status = "completed"
+                reason = f"ran {self.k} ticks ({max(self.k - 1, 0) * self.dt:.6g} s)"
+            return session.run.finished(status, reason, float(self._ticks.wall))
 
 
 def _count(value: Any, field: str) -> int:

@@ -48,6 +48,7 @@ class RunState(Protocol):
     crun: Any
     goals: Any
     progress: Any
+    event_size: int
     steps: int
     max_err: float
     err: float
@@ -139,6 +140,7 @@ def engine_run(run: RunState) -> Any:
         record=_record_arrays(engine, run.rec, run.goals),
         joints=_joint_monitor_config(engine, run.monitor.joints),
         constraints=None if run.cset is None else run.cset.engine_config(),
+        events=run.event_size,
         **more,
     )
 

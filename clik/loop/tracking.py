@@ -107,8 +107,10 @@ class _Run:
         tolerance: Tolerance | None = None,
         q0: np.ndarray | None = None,
         ring: int | None = None,
+        events: int = 0,
     ) -> None:
         self.tr = tracker
+        self.event_size = events  # the constraint events kept (0: every one)
         self.tolerance = Tolerance() if tolerance is None else tolerance
         self.task = task = tracker.task
         self.robot = robot = tracker.robot
@@ -131,7 +133,7 @@ class _Run:
         if cset is not None and python:  # the compiled engine's is in C++
             self.crun = ConstraintRun(
                 cset, m, tracker.law, tracker.alpha, t, self.rec.capacity, task.frame_id,
-                task.rows, self.data,
+                task.rows, self.data, events,
             )  # fmt: skip
         self.goals = GoalState(
             tracker, t, None if chunks is None else chunks.size, self.rec.capacity, q0

@@ -93,7 +93,10 @@ class TrackingResult:
         final_task_error: Task error norm at the last step [m or rad].
         joint_min: Minimum of each joint over every step (nq,).
         joint_max: Maximum of each joint over every step (nq,).
-        events: Constraint events ``{"t", "constraint", "action"}`` (see ``clik.constraints``).
+        events: Constraint events ``{"t", "constraint", "action"}`` (see ``clik.constraints``):
+            every one of an offline run, the last ones of a controller's session.
+        events_dropped: Events of a controller's session no longer kept (its
+            ``event_size`` last are; 0 for an offline run, which keeps every one).
         violations: Limits crossed, ``{"constraint", "t_first", "t_last", "worst"}``
             (``worst``: deepest penetration [m] or largest excursion [rad or m]); see
             :mod:`clik.constraints.violations`.
@@ -130,6 +133,7 @@ class TrackingResult:
     joint_min: np.ndarray
     joint_max: np.ndarray
     events: list[dict[str, Any]] = field(default_factory=list)
+    events_dropped: int = 0
     violations: list[dict[str, Any]] = field(default_factory=list)
     min_obstacle_distance: np.ndarray | None = None
     active_count: np.ndarray | None = None
@@ -160,6 +164,7 @@ class TrackingResult:
             "joint_min": [float(v) for v in self.joint_min],
             "joint_max": [float(v) for v in self.joint_max],
             "events": [dict(e) for e in self.events],
+            "events_dropped": int(self.events_dropped),
             "violations": [dict(v) for v in self.violations],
             "task_errors": {k: dict(v) for k, v in self.task_errors.items()},
         }
@@ -234,6 +239,7 @@ class TrackingResult:
             "max_task_error": self.max_task_error,
             "final_task_error": self.final_task_error,
             "events": self.events,
+            "events_dropped": self.events_dropped,
             "violations": self.violations,
             "info": self.info,
             "task_errors": self.task_errors,

@@ -16,6 +16,7 @@ import pinocchio as pin
 
 from clik.errors import InputError
 from clik.tasks.kind import BaseTask
+from clik.tasks.targets import FrameTarget
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
@@ -58,6 +59,10 @@ class ComTask(BaseTask):
     def axes(self) -> list[str]:
         """The kept axes."""
         return [COM_AXES[i] for i in self.rows]
+
+    def tick_target(self) -> FrameTarget:
+        """A position (3,) [m] (or a pose's), and its velocity (:mod:`clik.tasks.targets`)."""
+        return FrameTarget(True, False, tuple(int(r) for r in self.rows), rotation_ref=False)
 
     def __repr__(self) -> str:
         return f"ComTask(axes={self.axes})"

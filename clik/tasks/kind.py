@@ -11,7 +11,8 @@ the levels, gains and references; a kind owns:
 - its rows at a configuration (:meth:`BaseTask.fill`), and the two norms of its error
   a run reports (:meth:`BaseTask.error_norms`);
 - its configuration for the compiled engine (:meth:`BaseTask.engine_goal`, one C++
-  type in ``src/engine/tasks/``).
+  type in ``src/engine/tasks/``);
+- what it takes as a controller's target for one tick (:meth:`BaseTask.tick_target`).
 
 The kinds: :class:`~clik.tasks.task.Task` (a frame, in the world),
 :class:`~clik.tasks.relative_task.RelativeTask` (a frame in another frame),
@@ -30,6 +31,7 @@ if TYPE_CHECKING:
     import pinocchio as pin
 
     from clik.model.robot import Robot
+    from clik.tasks.targets import TickTarget
 
 
 class BaseTask(ABC):
@@ -87,6 +89,10 @@ class BaseTask(ABC):
     @abstractmethod
     def engine_goal(self, engine: Any) -> Any:
         """This task as the compiled engine's goal (``_engine.FrameGoal`` ...)."""
+
+    @abstractmethod
+    def tick_target(self) -> TickTarget:
+        """What it takes as a controller's target for one tick (:mod:`clik.tasks.targets`)."""
 
     @abstractmethod
     def describe(self) -> str:

@@ -19,6 +19,7 @@ import numpy as np
 from clik.errors import InputError
 from clik.model.joints import CONTINUOUS, PRISMATIC, REVOLUTE
 from clik.tasks.kind import BaseTask
+from clik.tasks.targets import PostureTarget
 
 if TYPE_CHECKING:
     import pinocchio as pin
@@ -77,6 +78,10 @@ class PostureTask(BaseTask):
     def axes(self) -> list[str]:
         """The joints' names."""
         return list(self.joints)
+
+    def tick_target(self) -> PostureTarget:
+        """The joints' values (m,) and velocities (:mod:`clik.tasks.targets`)."""
+        return PostureTarget(self.m)
 
     def __repr__(self) -> str:
         return f"PostureTask(joints={self.joints})"

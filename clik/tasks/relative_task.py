@@ -26,6 +26,7 @@ import pinocchio as pin
 
 from clik.errors import InputError
 from clik.tasks.kind import BaseTask
+from clik.tasks.targets import FrameTarget
 from clik.tasks.task import (
     AXES,
     Task,
@@ -93,6 +94,12 @@ class RelativeTask(BaseTask):
     def error_norms(self, e: np.ndarray) -> tuple[float, float]:
         """Norms of the position rows [m] and orientation rows [rad]."""
         return split_norms(self.rows, e)
+
+    def tick_target(self) -> FrameTarget:
+        """A's pose (position, rotation) in B, and its velocity (:mod:`clik.tasks.targets`)."""
+        return FrameTarget(
+            self.has_position, self.has_orientation, tuple(int(r) for r in self.rows)
+        )
 
     def __repr__(self) -> str:
         return (

@@ -26,6 +26,7 @@ import pinocchio as pin
 
 from clik.errors import InputError
 from clik.tasks.kind import BaseTask
+from clik.tasks.targets import FrameTarget
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
@@ -115,6 +116,12 @@ class Task(BaseTask):
     def axes(self) -> list[str]:
         """Names of the kept components, in row order."""
         return [AXES[i] for i in self.rows]
+
+    def tick_target(self) -> FrameTarget:
+        """A pose, a position or a rotation, and its velocity (:mod:`clik.tasks.targets`)."""
+        return FrameTarget(
+            self.has_position, self.has_orientation, tuple(int(r) for r in self.rows)
+        )
 
     def __repr__(self) -> str:
         return f"Task(frame={self.frame!r}, kind={self.kind!r}, axes={self.axes})"

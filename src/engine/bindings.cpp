@@ -8,11 +8,14 @@
 
 #include "bindings.hpp"
 #include "model/model_bridge.hpp"
+#define CLIK_NUMPY_IMPORT  // NumPy's C API table, imported here once (numpy_api.hpp)
+#include "numpy_api.hpp"
 
 namespace nb = nanobind;
 
 NB_MODULE(_engine, m) {
   m.doc() = "clik's compiled engine (load it through clik.engine)";
+  if (_import_array() < 0) throw nb::python_error();
   m.attr("PINOCCHIO_VERSION") = PINOCCHIO_VERSION;
   m.attr("COAL_VERSION") = COAL_VERSION;
   m.def("model_dimensions", [](nb::handle model) {

@@ -224,8 +224,10 @@ def test_targets_come_from_the_shipped_toml(quick):
     shipped = load_targets()
     assert [t["name"] for t in report["targets"]] == [t.name for t in shipped]
     assert [t["target"] for t in report["targets"]] == [t.wanted for t in shipped]
-    assert len(shipped) == 20
+    assert len(shipped) == 22
     by_measure = {(t.measure, t.over): t for t in shipped}
+    assert by_measure[("memory_growth_mb.controller_session", None)].bound == 1.0
+    assert by_measure[("controller_session.result_ms", None)].bound == 50.0
     assert by_measure[("step_us.dual_arm", None)].bound == 6.0
     assert by_measure[("step_us.pink_dual_arm", "step_us.dual_arm")].bound == 30.0
     assert by_measure[("step_us.planar4r", None)].bound == 1.5

@@ -43,8 +43,15 @@ const char* action_name(EventAction action) {
 
 ConstraintRun::ConstraintRun(const ConstraintSetConfig& config, const pinocchio::Model& model,
                              int m, LawKind law, double alpha, const Clock& t, int n_rec,
-                             int frame, std::vector<int> task_rows, int task_m)
-    : cfg_(config), model_(model), m_(m), task_m_(task_m < 0 ? m : task_m), law_(law), alpha_(alpha), t_(t) {
+                             int frame, std::vector<int> task_rows, int task_m, long events)
+    : cfg_(config),
+      model_(model),
+      m_(m),
+      task_m_(task_m < 0 ? m : task_m),
+      law_(law),
+      alpha_(alpha),
+      t_(t),
+      events_(events) {
   if (cfg_.model == nullptr || model.nv != cfg_.model->nv || model.nq != cfg_.model->nq) {
     throw std::invalid_argument("ConstraintRun: the model is not the constraint set's robot");
   }
@@ -78,13 +85,14 @@ ConstraintRun::ConstraintRun(const ConstraintSetConfig& config, const pinocchio:
   cur_index_.assign(n_keys, -1);
   is_active_.assign(n_keys, 0);
   skipped_.assign(n_keys, 0);
+  ever_skipped_.assign(n_keys, 0);
+  sample_events_.reserve(3 * static_cast<std::size_t>(n_keys));
   in_fresh_.assign(n_keys, 0);
   skipped_list_.reserve(n_keys);
   qdot_ = Vec::Zero(model.nv);
   q_prev_ = Vec::Zero(model.nq);
   dq_ = Vec::Zero(model.nv);
 
-  events_.reserve(256);
   code_of_key_.assign(n_keys, -1);
   code_keys_.reserve(n_keys);
   slots_ = std::max(limit_, 1);
@@ -97,6 +105,7 @@ ConstraintRun::ConstraintRun(const ConstraintSetConfig& config, const pinocchio:
 int ConstraintRun::update(long k, const Eigen::Ref<const Vec>& q, pinocchio::Data& data,
                           ExtendedTask& ext, Law& law, bool exact) {
   const double tk = t_[k];
+  sample_events_.clear();
   // _evaluate: constraints whose error is positive, or that are active, at this sample.
   mark_active();
   cand_.clear();
@@ -183,6 +192,7 @@ void ConstraintRun::activate(double tk) {
     } else if (!skipped_[c.key]) {
       skipped_[c.key] = 1;
       skipped_list_.push_back(c.key);
+      ever_skipped_[c.key] = 1;
       event(tk, c.key, EventAction::skipped);
     }
   }
@@ -249,7 +259,9 @@ int ConstraintRun::project_release(double tk, ExtendedTask& ext, Law& law, int v
 }
 
 void ConstraintRun::event(double tk, int key, EventAction action) {
-  events_.push_back({round9(tk), key, action});
+  const Event e{round9(tk), key, action};
+  events_.push(e);
+  sample_events_.push_back(e);
 }
 
 // -- limits and records ----------------------------------------------------------------
@@ -296,8 +308,8 @@ std::vector<std::string> ConstraintRun::active_names() const {
 
 std::vector<std::string> ConstraintRun::skipped_names() const {
   std::set<std::string> names;
-  for (const Event& e : events_) {
-    if (e.action == EventAction::skipped) names.insert(names_[e.key]);
+  for (std::size_t key = 0; key < ever_skipped_.size(); ++key) {
+    if (ever_skipped_[key]) names.insert(names_[key]);
   }
   return {names.begin(), names.end()};
 }

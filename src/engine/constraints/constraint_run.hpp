@@ -35,7 +35,8 @@
 //   none exact).
 //
 // After the run (bind_constraints.cpp's `constraint_records` hands them to Python):
-//   events()        {t (rounded to 9 decimals as Python's round), key, action}
+//   events()        {t (rounded to 9 decimals as Python's round), key, action}: every one,
+//                   or the last ones of a bounded log (event_log.hpp)
 //   code_keys()     the key of each code used in rec_active (in code order)
 //   rec_active(), rec_witness()   per recorded slot
 //   skipped_names(), active_names(), limit(), and each kind's records (kind_records).
@@ -51,6 +52,7 @@
 
 #include "constraints/collision_scene.hpp"
 #include "constraints/constraint_set.hpp"
+#include "constraints/event_log.hpp"
 #include "constraints/kind.hpp"
 #include "constraints/kinds.hpp"
 #include "loop/laws.hpp"
@@ -60,25 +62,16 @@
 
 namespace clik {
 
-enum class EventAction : std::uint8_t { activate, release, skipped };
-const char* action_name(EventAction action);
-
-struct Event {
-  double t;  // [s], rounded to 9 decimals as round(t, 9) in Python
-  int key;
-  EventAction action;
-};
-
 class ConstraintRun {
  public:
   // Throws std::invalid_argument when the model is not the config's robot, or a kind
   // cannot run (e.g. a dexterity row without the task's frame and rows).
   // m: every task row (the primary's and the extra goals'), the constraint rows' offset;
   // task_m: the primary task's rows (0 .. task_m), those of `frame` and `task_rows`
-  // (-1: m, a run with one task).
+  // (-1: m, a run with one task); events: the events kept (the last ones; 0: every one).
   ConstraintRun(const ConstraintSetConfig& config, const pinocchio::Model& model, int m,
                 LawKind law, double alpha, const Clock& t, int n_rec, int frame = -1,
-                std::vector<int> task_rows = {}, int task_m = -1);
+                std::vector<int> task_rows = {}, int task_m = -1, long events = 0);
   // The kinds point into the run's own copy of the config and scene: neither copied nor moved.
   ConstraintRun(const ConstraintRun&) = delete;
   ConstraintRun& operator=(const ConstraintRun&) = delete;
@@ -112,7 +105,9 @@ class ConstraintRun {
   std::vector<std::string> active_names() const;
   // Constraints violated that found no free row, sorted, unique (skipped_names).
   std::vector<std::string> skipped_names() const;
-  const std::vector<Event>& events() const { return events_; }
+  const EventLog& events() const { return events_; }
+  // The events of the last update() (a controller's tick: all of them, whatever the log keeps).
+  const std::vector<Event>& sample_events() const { return sample_events_; }
   const std::vector<int>& code_keys() const { return code_keys_; }
   int slots() const { return slots_; }
   const Eigen::Matrix<std::int32_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& rec_active()
@@ -148,14 +143,15 @@ class ConstraintRun {
   // candidates and the active set (buffers at their largest sizes)
   std::vector<Candidate> cand_, active_, still_;
   std::vector<int> fresh_, cur_index_, marked_;
-  std::vector<char> is_active_, skipped_, in_fresh_;
+  std::vector<char> is_active_, skipped_, in_fresh_, ever_skipped_;
   std::vector<int> skipped_list_;
   Vec qdot_;
   Vec q_prev_, dq_;  // |dq| since the previous sample, for the kinds' certificates
   bool has_prev_ = false;
 
   // records
-  std::vector<Event> events_;
+  EventLog events_;
+  std::vector<Event> sample_events_;  // the last update()'s (room for every key's three)
   std::vector<int> code_of_key_, code_keys_;
   int slots_;
   Eigen::Matrix<std::int32_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rec_active_;

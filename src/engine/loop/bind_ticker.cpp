@@ -1,31 +1,40 @@
-// The controller's ticks in the engine (`_engine.Ticker`, used by clik/control/ticks.py):
-// one sample of an open run per call, `TrackingRun::advance(k, k + 1)`, and the tick's
-// verdict (docs/method.md, "Online control"; the Python form: Controller._verdict and
-// Controller._off_track in clik/control/controller.py). `step` reads a frame task's target
-// directly (the fast path) and returns the tick itself (`_engine.Tick`: its joints in rows
-// of blocks of numpy arrays, its verdict, events and active rows as Python objects, built
-// here); `step_arrays` takes the references Python packed (any tasks).
+// A controller's ticks in the engine (`_engine.Ticker`, held by clik.Controller; the
+// specification is clik/control/ticks.py's PythonTicks): one sample of an open run per
+// step, `TrackingRun::advance(k, k + 1)`, from each task's target of this tick, with the
+// tick's verdict (docs/method.md, "Online control").
+//
+// A step runs in phases, so that nothing of the engine is held across a Python call:
+//   1. the controller's turn (loop/turn.hpp): one thread at a time;
+//   2. stage: every task's target and velocity copied out of the caller's objects into the
+//      ticker's own buffers (a NumPy float64 array read in place through NumPy's C API; any
+//      other form converted by clik.control.targets.as_floats first: Python runs here);
+//   3. read and run: the tasks' readers check the numbers once (tasks/targets.hpp), the run
+//      advances one sample, and the tick's values are copied out (C++ only);
+//   4. the tick made as a Python object (its arrays, copies), its reason asked of Python
+//      when its verdict is not ok.
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
-#include <nanobind/ndarray.h>
-#include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
 
 #include "boundary.hpp"
 #include "loop/py_tick.hpp"
 #include "loop/py_tracking_run.hpp"
-#include "loop/tick_input.hpp"
+#include "loop/tick_targets.hpp"
+#include "loop/turn.hpp"
 #include "model/model_bridge.hpp"
+#include "numpy_api.hpp"
 
 namespace nb = nanobind;
 
@@ -34,44 +43,217 @@ namespace clik {
 namespace {
 
 enum Verdict : int { ok = 0, deadlock = 1, violated = 2, diverged = 3, off_track = 4 };
+constexpr const char* VERDICT_NAMES[] = {"ok", "deadlock", "violated", "diverged", "off_track"};
 
 // The tolerance of the off_track verdict: position [m], orientation [rad], settling [s].
 struct TickTolerance {
   double position, orientation, settling;
 };
 
-constexpr const char* VERDICT_NAMES[] = {"ok", "deadlock", "violated", "diverged", "off_track"};
+// A NumPy float64 array read in place: aligned, in the machine's byte order, C-contiguous.
+bool plain_doubles(PyObject* o) {
+  if (!PyArray_Check(o)) return false;
+  auto* a = reinterpret_cast<PyArrayObject*>(o);
+  return PyArray_TYPE(a) == NPY_DOUBLE && PyArray_ISCARRAY_RO(a) && PyArray_ISNOTSWAPPED(a);
+}
+
+// A new NumPy float64 array (n,) holding a copy of v.
+nb::object array_of(const double* v, long n) {
+  npy_intp size = n;
+  PyObject* a = PyArray_SimpleNew(1, &size, NPY_DOUBLE);
+  if (a == nullptr) throw nb::python_error();
+  std::memcpy(PyArray_DATA(reinterpret_cast<PyArrayObject*>(a)), v,
+              static_cast<std::size_t>(n) * sizeof(double));
+  return nb::steal(a);
+}
+
+// ``shape (16,)`` as Python writes a shape.
+std::string shape_words(const std::vector<long>& shape) {
+  std::string s = "shape (";
+  for (std::size_t i = 0; i < shape.size(); ++i) {
+    s += (i ? ", " : "") + std::to_string(shape[i]);
+  }
+  return s + (shape.size() == 1 ? ",)" : ")");
+}
+
+// The values of a 1-D or 2-D form as a Python list (of lists).
+nb::list values_list(const Floats& f) {
+  nb::list out;
+  if (f.shape.size() == 1) {
+    for (long i = 0; i < f.shape[0]; ++i) out.append(f.values[static_cast<std::size_t>(i)]);
+    return out;
+  }
+  for (long i = 0; i < f.shape[0]; ++i) {
+    nb::list row;
+    for (long j = 0; j < f.shape[1]; ++j) {
+      row.append(f.values[static_cast<std::size_t>(i * f.shape[1] + j)]);
+    }
+    out.append(row);
+  }
+  return out;
+}
 
 struct PyTicker {
-  nb::object owner;  // the PyTrackingRun (kept alive)
-  PyTrackingRun* run;
-  const pinocchio::Model* model;  // the run's (its Python object kept alive by the run)
-  WrittenArray<double> q;     // the controller's joints (nq), q_k in, q_{k+1} out
-  WrittenArray<double> qdot;  // qdot_k (nv), out
+  nb::object turn_ref;  // the controller's Turn (shared with its other methods)
+  Turn* turn;
+  nb::object refuse;       // clik.InputError
+  nb::object convert;      // clik.control.targets.as_floats(value, field, expected)
+  nb::object as_mapping;   // clik.control.targets.as_mapping(value, field, names)
+  nb::object check_model;  // the robot's check_model (raises clik.InputError)
+  nb::tuple task_names;
+  nb::handle tick_type;  // _engine.Tick (the module keeps it)
+  std::vector<nb::object> fields, velocity_fields;  // "targets['name']", "velocities['name']"
   TickTolerance tol;
-  TickInput input;
+  nb::object verdicts[5], no_reason;
+
+  // the session (restart)
+  nb::object owner;  // the PyTrackingRun (kept alive)
+  PyTrackingRun* run = nullptr;
+  const pinocchio::Model* model = nullptr;  // the run's (its Python object kept by the run)
+  nb::object explain;                       // (tick, stop, above_since) -> reason
+  std::unique_ptr<TickTargets> targets;
+  std::vector<std::string> target_words, velocity_words;
+  Vec q;
+  nb::tuple constraint_names;
   long notes = 0;
   double wall = 0.0;  // time in the ticks [s]
   double above_since = std::numeric_limits<double>::quiet_NaN();
   Advance last;
-  nb::object empty;                 // numpy.empty
-  NumpyTypes numpy;                 // numpy.ndarray and its float64 dtype
-  nb::object verdicts[5];           // the verdicts' names
-  nb::object no_reason, task_name;  // "" and the one task's name
-  RowBlocks q_rows, qdot_rows;
-  long seen = 0;                       // events already given in a tick
-  std::vector<nb::object> key_names;  // the constraints' names, by key (built when asked)
-  PyObject* self_py = nullptr;        // this ticker's Python object (borrowed)
-  nb::object general_ref, verdict_ref;  // the controller's methods (WeakMethods; serving)
+
+  void must_hold(const char* who) const {
+    if (!turn->mine()) throw std::logic_error(std::string(who) + ": the controller's turn");
+  }
+
+  [[noreturn]] void raise(nb::handle field, const std::string& expected, nb::handle got) const {
+    nb::object error = refuse(field, expected, got);
+    PyErr_SetObject(reinterpret_cast<PyObject*>(Py_TYPE(error.ptr())), error.ptr());
+    throw nb::python_error();
+  }
+
+  // -- phase 2: the caller's objects into the ticker's buffers --------------------------
+
+  // One target (velocity) of task i: its shape, and its values when the task takes it.
+  void stage(int i, nb::handle value, bool velocity) {
+    const auto at = static_cast<std::size_t>(i);
+    nb::object converted;
+    PyObject* o = value.ptr();
+    if (!plain_doubles(o)) {  // Python code may run here: nothing of the ticker is held
+      const nb::object field = velocity ? velocity_fields[at] : fields[at];
+      const nb::str words((velocity ? velocity_words[at] : target_words[at]).c_str());
+      converted = convert(value, field, words);
+      o = converted.ptr();
+      if (!plain_doubles(o)) throw std::logic_error("as_floats: a float64 C-contiguous array");
+    }
+    auto* a = reinterpret_cast<PyArrayObject*>(o);
+    Floats& f = velocity ? targets->velocity(i) : targets->target(i);
+    const npy_intp* dims = PyArray_DIMS(a);
+    f.given = true;
+    f.shape.assign(dims, dims + PyArray_NDIM(a));
+    const TargetReader& reader = targets->reader(i);
+    const long n = velocity ? velocity_size(reader, f) : target_size(reader, f);
+    if (n < 0) {
+      const std::string got = shape_words(f.shape);
+      raise(velocity ? velocity_fields[at] : fields[at],
+            velocity ? velocity_words[at] : target_words[at], nb::str(got.c_str()));
+    }
+    std::memcpy(f.values.data(), PyArray_DATA(a), static_cast<std::size_t>(n) * sizeof(double));
+  }
+
+  // targets (velocities) by task name: a dict (read as is), anything as_mapping makes a
+  // dict of; else None: the value of the one task itself. Every key must name a task and,
+  // for the targets, every task have one.
+  nb::object by_name(nb::handle value, const char* field, bool every) const {
+    const int n = targets->count();
+    nb::object map;
+    if (PyDict_Check(value.ptr())) {
+      map = nb::borrow(value);
+    } else if (n == 1 && plain_doubles(value.ptr())) {
+      return nb::none();
+    } else {
+      map = as_mapping(value, field, task_names);
+      if (map.is_none()) {
+        if (n == 1) return map;
+        raise(nb::str(field),
+              std::string("a mapping of task name to ") + (every ? "target" : "velocity") +
+                  " (" + joined() + ")",
+              value);
+      }
+    }
+    Py_ssize_t found = 0;
+    for (nb::handle name : task_names) {
+      const int has = PyDict_Contains(map.ptr(), name.ptr());
+      if (has < 0) throw nb::python_error();
+      found += has;
+    }
+    if (PyDict_Size(map.ptr()) > found) unknown_key(map, field);
+    if (every && found < n) {
+      raise(nb::str(field), "a target for every task (" + joined() + ")", nb::none());
+    }
+    return map;
+  }
+
+  // The first key of a mapping that names no task: refused.
+  [[noreturn]] void unknown_key(const nb::object& map, const char* field) const {
+    PyObject *key, *value;
+    Py_ssize_t pos = 0;
+    while (PyDict_Next(map.ptr(), &pos, &key, &value)) {
+      const nb::object k = nb::borrow(key);  // held: comparing may run Python code
+      int found = 0;
+      for (nb::handle name : task_names) {
+        const int eq = PyObject_RichCompareBool(k.ptr(), name.ptr(), Py_EQ);
+        if (eq < 0) throw nb::python_error();
+        found += eq;
+      }
+      if (found == 0) {
+        const std::string names = nb::cast<std::string>(nb::repr(nb::list(task_names)));
+        raise(nb::str(field), "task names among " + names, k);
+      }
+    }
+    throw std::logic_error("Ticker: a mapping with a key that names no task");
+  }
+
+  // The value of task `name` in a mapping (None: left out).
+  static nb::object item(const nb::object& map, nb::handle name) {
+    PyObject* v = PyDict_GetItemWithError(map.ptr(), name.ptr());
+    if (v == nullptr && PyErr_Occurred()) throw nb::python_error();
+    return v == nullptr ? nb::none() : nb::borrow(v);
+  }
+
+  void stage_all(nb::handle targets_in, nb::handle velocities_in) {
+    const nb::object tmap = by_name(targets_in, "targets", true);
+    const bool moving = !velocities_in.is_none();
+    const nb::object vmap = moving ? by_name(velocities_in, "velocities", false) : nb::none();
+    for (int i = 0; i < targets->count(); ++i) {
+      const nb::handle name = task_names[static_cast<std::size_t>(i)];
+      stage(i, tmap.is_none() ? nb::borrow(targets_in) : item(tmap, name), false);
+      const nb::object velocity =
+          !moving ? nb::none() : vmap.is_none() ? nb::borrow(velocities_in) : item(vmap, name);
+      if (velocity.is_none()) {
+        targets->velocity(i).given = false;
+      } else {
+        stage(i, velocity, true);
+      }
+    }
+  }
+
+  std::string joined() const {
+    std::string s;
+    for (nb::handle name : task_names) {
+      s += (s.empty() ? "" : ", ") + nb::cast<std::string>(nb::str(name));
+    }
+    return s;
+  }
+
+  // -- phase 3: read and run -------------------------------------------------------------
 
   // The verdict of the sample just run at time tk (the worst that holds).
   int judge(double tk) {
     const TrackingRun& r = *run->run;
-    const long seen = notes;
+    const long before = notes;
     notes = r.monitor().notes();
     if (last.stop == Stop::deadlock || last.stop == Stop::stall) return deadlock;
     if (last.stop != Stop::none) return diverged;
-    if (notes != seen) return violated;
+    if (notes != before) return violated;
     const TaskConfig& task = r.task();
     const double limit = task.has_position ? tol.position : tol.orientation;
     bool above = !(r.last_error() <= limit);
@@ -86,293 +268,181 @@ struct PyTicker {
     return tk - above_since > tol.settling ? off_track : ok;
   }
 
-  // The model's sizes, unchanged since the run was built (compared without a lookup).
-  void check_model() const {
-    if (!(ModelShape::of(*model) == run->built)) {
-      require_same_model(run->built, *model, "Controller.step");
+  // A refusal by task i's reader, raised as clik.InputError.
+  [[noreturn]] void refused(int i, const Refusal& why) const {
+    const auto at = static_cast<std::size_t>(i);
+    Floats f = why.velocity ? targets->velocity(i) : targets->target(i);  // a copy
+    if (why.show == Refusal::Show::last_row) {  // a 4x4's last row
+      std::vector<double> row(f.values.begin() + 12, f.values.begin() + 16);
+      f.values = std::move(row);
+      f.shape = {4};
     }
+    raise(why.velocity ? velocity_fields[at] : fields[at], why.expected, values_list(f));
   }
 
-  // After the sample k: the verdict, and (verdict, error, orientation error, events, t_k).
-  nb::tuple ran(long k, Advance a, std::chrono::steady_clock::time_point start) {
-    run->next = a.next;
-    last = a;
-    const TrackingRun& r = *run->run;
-    Eigen::Map<Vec>(qdot.data(), static_cast<Eigen::Index>(qdot.shape(0))) = r.qdot();
-    const int verdict = judge(r.time(k));
-    const long events = run->constraints ? static_cast<long>(run->constraints->events().size()) : 0;
-    wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return nb::make_tuple(verdict, r.last_error(), r.last_orientation_error(), events, r.time(k));
-  }
-
-  Eigen::Map<Vec> joints() { return {q.data(), static_cast<Eigen::Index>(q.shape(0))}; }
-
-  // The constraint named by key, as a Python string made once.
-  const nb::object& key_name(int key) {
-    const auto at = static_cast<std::size_t>(key);
-    if (at >= key_names.size()) key_names.resize(at + 1);
-    if (!key_names[at].is_valid()) key_names[at] = nb::str(run->constraints->name(key).c_str());
-    return key_names[at];
-  }
-
-  // The run's events [e0, e1) as {t, constraint, action} dicts.
-  nb::list events(long e0, long e1) {
-    nb::list out;
-    const auto& all = run->constraints->events();
-    for (long e = e0; e < e1; ++e) {
-      const Event& ev = all[static_cast<std::size_t>(e)];
-      nb::dict d;
-      d["t"] = ev.t;
-      d["constraint"] = key_name(ev.key);
-      d["action"] = action_name(ev.action);
-      out.append(d);
+  nb::object step(nb::handle targets_in, nb::handle velocities_in, bool held) {
+    std::optional<Turn::Held> turn_held;
+    if (held) {
+      must_hold("Ticker.step(held=True)");
+    } else {
+      turn_held.emplace(*turn, "Controller.step");
     }
-    return out;
-  }
-
-  // After the sample k: the tick (the fast path). Its events and active keys are noted
-  // here, their Python lists made when read.
-  nb::object tick(long k, Advance a, std::chrono::steady_clock::time_point start) {
-    run->next = a.next;
-    last = a;
-    const TrackingRun& r = *run->run;
-    Eigen::Map<Vec>(qdot.data(), static_cast<Eigen::Index>(qdot.shape(0))) = r.qdot();
-    if (self_py == nullptr) self_py = nb::find(this).ptr();  // borrowed: ticks hold it
+    stage_all(targets_in, velocities_in);
+    if (!(ModelShape::of(*model) == run->built)) {  // changed meanwhile: named by the robot
+      check_model();
+      raise(nb::str("robot.model"), "the model the controller was built on", nb::none());
+    }
+    int i = 0;
+    Refusal why;
+    if (!targets->read(i, why)) refused(i, why);
+    // the tick's Python object first (a Python allocation: nothing of the engine held)
+    nb::object tick = nb::inst_alloc(tick_type);
+    PyTick& out = *new (nb::inst_ptr<PyTick>(tick)) PyTick();
+    nb::inst_mark_ready(tick);
+    const auto start = std::chrono::steady_clock::now();
+    const long k = run->next;
+    TrackingRun& r = *run->run;
+    last = r.advance(k, k + 1, targets->P_d(), targets->R_d(), targets->FF(),
+                     targets->at_rest(), q, targets->goal_ref(), targets->goal_ff());
+    run->next = last.next;
     const double tk = r.time(k);
-    PyTick out;
     out.code = judge(tk);
     out.t = tk;
     out.k = k;
-    out.err = r.last_error();
-    out.err_rot = r.last_orientation_error();
-    out.q = q_rows.next(q.data(), static_cast<long>(q.shape(0)), empty);
-    out.qdot = qdot_rows.next(qdot.data(), static_cast<long>(qdot.shape(0)), empty);
     out.verdict = verdicts[out.code];
     out.reason = no_reason;
-    out.ticker = nb::borrow(self_py);
-    if (const ConstraintRun* c = run->constraints.get()) {
-      out.ev0 = seen;
-      out.ev1 = seen = static_cast<long>(c->events().size());
-      for (const Candidate& cand : c->active()) {
-        if (out.n_active < static_cast<int>(out.keys.size())) {
-          out.keys[static_cast<std::size_t>(out.n_active)] = cand.key;
-        } else {
-          out.more_keys.push_back(cand.key);
-        }
-        ++out.n_active;
-      }
+    out.task_names = task_names;
+    out.constraint_names = constraint_names;
+    out.errors.push_back(r.last_error());
+    out.errors.push_back(r.last_orientation_error());
+    const Mat& goals = r.goal_last();
+    for (Eigen::Index g = 0; g < goals.rows(); ++g) {
+      out.errors.push_back(goals(g, 0));
+      out.errors.push_back(goals(g, 1));
     }
+    if (const ConstraintRun* c = run->constraints.get()) {
+      out.events = c->sample_events();
+      for (const Candidate& cand : c->active()) out.active.push_back(cand.key);
+    }
+    for (Eigen::Index j = 0; j < q.size(); ++j) out.q.push_back(q[j]);
+    const Vec& qdot = r.qdot();
+    for (Eigen::Index j = 0; j < qdot.size(); ++j) out.qdot.push_back(qdot[j]);
     wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return nb::cast(std::move(out));
+    if (out.code != ok) {  // its reason, in Python (nothing of the engine held)
+      nb::object reason = explain(tick, stop_tuple(), above_since);
+      nb::inst_ptr<PyTick>(tick)->reason = std::move(reason);
+    }
+    return tick;
   }
 
-  // One of the served controller's methods (weakly held: the controller holds the ticker).
-  static nb::object method(const nb::object& weak) {
-    nb::object m = weak.is_valid() ? weak() : nb::none();
-    if (m.is_none()) throw std::invalid_argument("Ticker: its controller is gone (serving)");
-    return m;
+  nb::tuple stop_tuple() const {
+    return nb::make_tuple(last.next, stop_name(last.stop), last.k, last.r, last.err);
+  }
+
+  // A new session on an open run from q0 (the controller's turn held by reset).
+  void restart(nb::object run_owner, const Eigen::Ref<const Vec>& q0, nb::object explainer) {
+    must_hold("Ticker.restart");
+    PyTrackingRun& r = nb::cast<PyTrackingRun&>(run_owner);
+    require(r.run->is_open(), "Ticker.restart: an open TrackingRun (t None)");
+    require(q0.size() == r.record.nq(), "Ticker.restart: q0 (nq,)");
+    const pinocchio::Model& m = borrow_model(r.model.ptr());
+    require_same_model(r.built, m, "Ticker.restart");
+    auto in = std::make_unique<TickTargets>(*r.run);
+    require(in->count() == static_cast<int>(task_names.size()),
+            "Ticker.restart: the run has one task per name");
+    std::vector<std::string> tw, vw;
+    for (int i = 0; i < in->count(); ++i) {
+      tw.push_back(target_forms(in->reader(i)));
+      vw.push_back(velocity_forms(in->reader(i)));
+    }
+    std::vector<std::string> keys;  // copied first: nothing of the run held across Python calls
+    for (int key = 0; r.constraints && key < r.constraints->n_keys(); ++key) {
+      keys.push_back(r.constraints->name(key));
+    }
+    nb::list names;
+    for (const std::string& key : keys) names.append(nb::str(key.c_str()));
+    owner = std::move(run_owner);
+    run = &r;
+    model = &m;
+    explain = std::move(explainer);
+    targets = std::move(in);
+    target_words = std::move(tw);
+    velocity_words = std::move(vw);
+    q = q0;
+    constraint_names = nb::tuple(names);
+    notes = 0;
+    wall = 0.0;
+    above_since = std::numeric_limits<double>::quiet_NaN();
+    last = Advance{};
   }
 };
 
-void make_ticker(PyTicker* self, nb::object owner, WrittenArray<double> q,
-                 WrittenArray<double> qdot, double tol_position, double tol_orientation,
-                 double settling_time, const std::string& name, nb::object empty,
-                 nb::object ndarray, nb::object float64) {
-  PyTrackingRun& run = nb::cast<PyTrackingRun&>(owner);
-  require(run.run->is_open(), "Ticker: an open TrackingRun (t None)");
-  require(q.ndim() == 1 && static_cast<long>(q.shape(0)) == run.record.nq() &&
-              qdot.ndim() == 1 && static_cast<long>(qdot.shape(0)) == run.record.nv(),
-          "Ticker: q (nq,) and qdot (nv,), float64, C-contiguous");
-  const pinocchio::Model& model = borrow_model(run.model.ptr());
-  require_same_model(run.built, model, "Ticker");
+void make_ticker(PyTicker* self, nb::object turn, nb::object refuse, nb::object convert,
+                 nb::object as_mapping, nb::object check_model, std::vector<std::string> names,
+                 double tol_position, double tol_orientation, double settling_time) {
+  require(!names.empty(), "Ticker: names, one per task");
   require(finite_positive(tol_position) && finite_positive(tol_orientation) &&
               finite_positive(settling_time),
           "Ticker: tolerance (position [m], orientation [rad]) and settling_time [s], > 0");
-  new (self) PyTicker{owner, &run, &model, q, qdot, {tol_position, tol_orientation, settling_time},
-                      TickInput(run.run->task())};
-  self->empty = std::move(empty);
-  self->numpy = NumpyTypes{std::move(ndarray), std::move(float64)};
+  Turn& t = nb::cast<Turn&>(turn);
+  new (self) PyTicker{};
+  self->turn_ref = std::move(turn);
+  self->turn = &t;
+  self->refuse = std::move(refuse);
+  self->convert = std::move(convert);
+  self->as_mapping = std::move(as_mapping);
+  self->check_model = std::move(check_model);
+  nb::list task_names;
+  for (const std::string& name : names) {
+    nb::str s(name.c_str());
+    task_names.append(s);
+    nb::object quoted = nb::repr(s);
+    self->fields.push_back(nb::str(("targets[" + nb::cast<std::string>(quoted) + "]").c_str()));
+    self->velocity_fields.push_back(
+        nb::str(("velocities[" + nb::cast<std::string>(quoted) + "]").c_str()));
+  }
+  self->task_names = nb::tuple(task_names);
+  self->tick_type = nb::type<PyTick>();
+  self->tol = {tol_position, tol_orientation, settling_time};
   for (int v = 0; v < 5; ++v) self->verdicts[v] = nb::str(VERDICT_NAMES[v]);
   self->no_reason = nb::str("");
-  self->task_name = nb::str(name.c_str());
-  self->seen = run.constraints ? static_cast<long>(run.constraints->events().size()) : 0;
-}
-
-// The fast path's sample: a frame task's target (16, 3 or 9 doubles) and velocity (6, 3 or
-// 0 doubles); None when they do not fit the task (nothing run).
-nb::object step(PyTicker& self, const double* target, long n, const double* velocity, long vn) {
-  PyTrackingRun& run = *self.run;
-  self.check_model();
-  if (run.run->goals().count() != 0) {  // no std::string built on the fast path
-    throw std::invalid_argument("Ticker.serve: one task (step_arrays for several)");
-  }
-  if (!self.input.set(target, n, velocity, vn)) return nb::none();
-  const auto start = std::chrono::steady_clock::now();
-  const long k = run.next;
-  auto q = self.joints();
-  const Advance a = run.run->advance(k, k + 1, self.input.position(), self.input.rotation(),
-                                     self.input.ff(), self.input.at_rest(), q);
-  return self.tick(k, a, start);
-}
-
-// Controller.step itself (the instance's, set by Controller.reset): a one-task target as
-// a float64 C-contiguous array (4x4, (3,) or (3, 3); its velocity (6,), (3,) or None) goes
-// straight to the engine; anything else (a pin.SE3, a list, moved obstacles, a shape the
-// task does not take) to the controller's general step, which checks it and names what is
-// wrong. A verdict other than ok gets its reason there.
-nb::object serve(PyTicker& self, nb::handle targets, nb::handle velocities, nb::handle obstacles) {
-  const auto general = [&]() {
-    return PyTicker::method(self.general_ref)(targets, velocities, obstacles);
-  };
-  if (!obstacles.is_none()) return general();
-  Doubles target, velocity;
-  if (!target.take(targets, self.numpy)) return general();
-  const long n = std::max({target.shaped(4, 4), target.shaped(3, 0), target.shaped(3, 3)});
-  long vn = 0;
-  if (!velocities.is_none()) {
-    if (!velocity.take(velocities, self.numpy)) return general();
-    vn = std::max(velocity.shaped(6, 0), velocity.shaped(3, 0));
-    if (vn < 0) return general();
-  }
-  if (n < 0) return general();
-  nb::object tick = step(self, target.data(), n, vn > 0 ? velocity.data() : nullptr, vn);
-  if (tick.is_none()) return general();
-  if (nb::cast<PyTick&>(tick).code != 0) PyTicker::method(self.verdict_ref)(tick);
-  return tick;
-}
-
-// Any tasks: one sample's references as Python packed them (as advance takes them).
-nb::tuple step_arrays(PyTicker& self, std::optional<In<double>> P_d, std::optional<In<double>> R_d,
-                      In<double> FF, In<bool> at_rest, std::optional<In<double>> goal_ref,
-                      std::optional<In<double>> goal_ff) {
-  PyTrackingRun& run = *self.run;
-  self.check_model();
-  const TrackingRun& r = *run.run;
-  const auto size = [](const std::optional<In<double>>& a) {
-    return a ? static_cast<long>(a->size()) : 0L;
-  };
-  const bool ok = size(P_d) == (r.task().has_position ? 3 : 0) &&
-                  size(R_d) == (r.task().has_orientation ? 9 : 0) &&
-                  static_cast<long>(FF.size()) == r.primary_rows() && at_rest.size() == 1 &&
-                  size(goal_ref) == r.goals().ref_size() && size(goal_ff) == r.goals().rows();
-  if (!ok) {
-    throw std::invalid_argument(
-        "Ticker.step_arrays: one sample's P_d (3), R_d (3, 3), FF (m0), at_rest (1), goal_ref "
-        "(D) and goal_ff (M), as the task has them");
-  }
-  self.input.forget();
-  const auto start = std::chrono::steady_clock::now();
-  const long k = run.next;
-  auto q = self.joints();
-  const Advance a = run.run->advance(k, k + 1, P_d ? P_d->data() : nullptr,
-                                     R_d ? R_d->data() : nullptr, FF.data(), at_rest.data(), q,
-                                     goal_ref ? goal_ref->data() : nullptr,
-                                     goal_ff ? goal_ff->data() : nullptr);
-  return self.ran(k, a, start);
 }
 
 }  // namespace
 
-void bind_tick(nb::module_& m) {
-  const auto ticker = [](const PyTick& s) -> PyTicker& { return nb::cast<PyTicker&>(s.ticker); };
-  nb::class_<PyTick>(m, "Tick",
-                     "One tick of a clik.Controller (its fast path): the attributes of "
-                     "clik.control.tick.Tick.")
-      .def_prop_ro("q", [](PyTick& s) { return s.q.get(); },
-                   "q_{k+1}, the joints to command next (nq,) [rad or m]: this tick's own "
-                   "array.")
-      .def_prop_ro("qdot", [](PyTick& s) { return s.qdot.get(); },
-                   "qdot_k, the law's joint velocity (nv,) [rad/s or m/s].")
-      .def_ro("t", &PyTick::t, "This tick's time t_k [s].")
-      .def_ro("k", &PyTick::k, "This tick's index.")
-      .def_ro("code", &PyTick::code,
-              "The verdict's code: 0 ok, 1 deadlock, 2 violated, 3 diverged, 4 off_track.")
-      .def_ro("verdict", &PyTick::verdict, "ok, deadlock, violated, diverged or off_track.")
-      .def_rw("reason", &PyTick::reason, "What happened, with numbers (\"\" when ok).")
-      .def_prop_ro("events",
-                   [ticker](PyTick& s) {
-                     if (!s.events.is_valid()) {
-                       s.events = s.ev1 > s.ev0 ? nb::object(ticker(s).events(s.ev0, s.ev1))
-                                                : nb::object(nb::list());
-                     }
-                     return s.events;
-                   },
-                   "This tick's constraint events, {t, constraint, action} dicts.")
-      .def_prop_ro("active",
-                   [ticker](PyTick& s) {
-                     if (!s.active.is_valid()) {
-                       nb::list out;
-                       for (int i = 0; i < s.n_active; ++i) {
-                         const auto at = static_cast<std::size_t>(i);
-                         const int key = at < s.keys.size() ? s.keys[at]
-                                                            : s.more_keys[at - s.keys.size()];
-                         out.append(ticker(s).key_name(key));
-                       }
-                       s.active = std::move(out);
-                     }
-                     return s.active;
-                   },
-                   "The constraints whose rows are active at this tick, in row order.")
-      .def_prop_ro("errors",
-                   [ticker](const PyTick& s) {
-                     nb::dict d;
-                     d[ticker(s).task_name] = nb::make_tuple(s.err, s.err_rot);
-                     return d;
-                   },
-                   "The task's error norms by name, {name: (position [m], orientation [rad])} "
-                   "(a new dict at each read).")
-      .def_prop_ro("ok", [](const PyTick& s) { return s.code == 0; },
-                   "Whether the verdict is ok.")
-      .def("__repr__", [](const PyTick& s) {
-        return "Tick(k=" + std::to_string(s.k) + ", t=" + std::to_string(s.t) +
-               ", verdict=" + nb::cast<std::string>(s.verdict) + ")";
-      });
-}
-
 void bind_ticker(nb::module_& m) {
   m.attr("ROTATION_TOLERANCE") = ROTATION_TOLERANCE;
+  bind_turn(m);
   bind_tick(m);
   nb::class_<PyTicker>(m, "Ticker", "A controller's ticks on an open TrackingRun.")
-      .def("__init__", &make_ticker, nb::arg("run"), nb::arg("q").noconvert(),
-           nb::arg("qdot").noconvert(),
+      .def("__init__", &make_ticker, nb::kw_only(), nb::arg("turn"), nb::arg("refuse"),
+           nb::arg("convert"), nb::arg("as_mapping"), nb::arg("check_model"), nb::arg("names"),
            nb::arg("tol_position"), nb::arg("tol_orientation"), nb::arg("settling_time"),
-           nb::arg("name"), nb::arg("empty"), nb::arg("ndarray"), nb::arg("float64"),
-           "run: an open TrackingRun; q: the controller's joints (nq,), updated in place; qdot "
-           "(nv,): each tick's joint velocity, written; name: the one task's name (the key of "
-           "Tick.errors); empty, ndarray, float64: numpy.empty, numpy.ndarray and "
-           "numpy.dtype('float64') (the ticks' rows are made with the first; a target of the "
-           "other two is read from its fields).")
-      .def("step_arrays", &step_arrays, nb::arg("P_d").noconvert().none(),
-           nb::arg("R_d").noconvert().none(), nb::arg("FF").noconvert(),
-           nb::arg("at_rest").noconvert(), nb::arg("goal_ref").noconvert().none() = nb::none(),
-           nb::arg("goal_ff").noconvert().none() = nb::none(),
-           "One tick with the references Python packed; returns (verdict code, error, "
-           "orientation_error, n_events, t_k) (the caller makes the tick).")
-      .def_prop_ro("stop",
-                   [](const PyTicker& s) {
-                     const Advance& a = s.last;
-                     return nb::make_tuple(a.next, stop_name(a.stop), a.k, a.r, a.err);
-                   },
-                   "The last tick's stop, as advance returns it: (next, stop, k, r, err).")
-      .def_rw("seen", &PyTicker::seen, "The constraint events given in ticks so far.")
-      .def("serve", &serve, nb::arg("targets"), nb::arg("velocities") = nb::none(),
-           nb::arg("obstacles") = nb::none(),
-           "Controller.step on the compiled engine's fast path (see clik.Controller.step): a "
-           "one-task target as a float64 C-contiguous array runs here, anything else in the "
-           "controller's _general_step.")
+           "turn: the controller's Turn; refuse: clik.InputError; convert(value, field, "
+           "expected): a target or velocity as a float64 C-contiguous array (or raises); "
+           "as_mapping(value, field, names): a dict, or None for a value that is no mapping; "
+           "check_model(): raises when the robot's model changed; names: the tasks'. Then "
+           "restart() gives it a session.")
+      .def("restart", &PyTicker::restart, nb::arg("run"), nb::arg("q0").noconvert(),
+           nb::arg("explain"),
+           "A new session (the turn held): run an open TrackingRun, q0 (nq,), explain(tick, "
+           "stop, above_since) -> the reason of a verdict other than ok.")
       .def(
-          "serving",
-          [](PyTicker& s, nb::object general, nb::object verdict) {
-            s.general_ref = std::move(general);
-            s.verdict_ref = std::move(verdict);
+          "step",
+          [](PyTicker& s, nb::handle targets, nb::handle velocities, bool held) {
+            require(s.run != nullptr, "Ticker.step: restart() first");
+            return s.step(targets, velocities, held);
           },
-          nb::arg("general"), nb::arg("verdict"),
-          "The served controller's methods, as weakref.WeakMethod: general(targets, velocities, "
-          "obstacles) takes what serve() does not; verdict(tick) gives a tick's reason.")
+          nb::arg("targets").none(), nb::arg("velocities").none() = nb::none(),
+          nb::arg("held") = false,
+          "One tick (Controller.step): the targets and velocities as the controller takes "
+          "them; held: the caller holds the turn already (obstacles moved first).")
+      .def_prop_ro("k", [](const PyTicker& s) { return s.run ? s.run->next : 0L; },
+                   "The next tick's index.")
+      .def_prop_ro("q", [](const PyTicker& s) { return array_of(s.q.data(), s.q.size()); },
+                   "The joints the next tick starts from (a copy).")
       .def_prop_ro("wall", [](const PyTicker& s) { return s.wall; },
-                   "Time spent in the ticks so far [s].")
-      .def_prop_ro("above_since", [](const PyTicker& s) { return s.above_since; },
-                   "Since when [s] the error is above the tolerance (NaN: it is not).");
+                   "Time spent in the ticks of this session [s].");
 }
 
 }  // namespace clik

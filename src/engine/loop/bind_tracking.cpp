@@ -59,7 +59,8 @@ void make_run(PyTrackingRun* self, nb::object model, const TaskConfig& task,
               const LawConfig& law, const StopConfig& stop, std::optional<In<double>> t,
               double t0, const RecordArrays& record, JointMonitorConfig joints,
               const std::optional<ConstraintSetConfig>& constraints,
-              const std::vector<GoalConfig>& goals) {
+              const std::vector<GoalConfig>& goals, long events) {
+  require(events >= 0, "TrackingRun: events, the constraint events kept (>= 1; 0: every one)");
   const pinocchio::Model& m = borrow_model(model.ptr());
   // The goals' rows (checked against the model: Goals throws naming the goal and field).
   const Goals goal_rows(m, goals);
@@ -81,7 +82,7 @@ void make_run(PyTrackingRun* self, nb::object model, const TaskConfig& task,
             "TrackingRun: the constraints are on a pin.Model of other sizes than the task's");
     crun = std::make_unique<ConstraintRun>(*constraints, m, m_rows, law.settings.kind, law.alpha,
                                            times, static_cast<int>(record.capacity()), task.frame,
-                                           task.rows, m0);
+                                           task.rows, m0, events);
     if (m_rows + std::max(crun->limit(), 0) > law.rows) {
       throw std::invalid_argument(
           "LawConfig.rows: fewer than the task's and the constraints' rows");
@@ -148,18 +149,6 @@ nb::tuple advance(PyTrackingRun& self, long c0, long c1, std::optional<In<double
   self.next = a.next;
   self.stopped = a.stop != Stop::none && !self.run->is_open();  // an open run goes on
   return nb::make_tuple(a.next, stop_name(a.stop), a.k, a.r, a.err);
-}
-
-// The constraint events from the i-th on: (t, constraint, action) (as constraint_records').
-nb::list events_since(const PyTrackingRun& self, long i) {
-  const long n = self.constraints ? static_cast<long>(self.constraints->events().size()) : 0;
-  require(i >= 0 && i <= n, "events_since: i, 0 <= i <= n_events (" + std::to_string(n) + ")");
-  nb::list out;
-  for (long e = i; e < n; ++e) {
-    const Event& ev = self.constraints->events()[static_cast<std::size_t>(e)];
-    out.append(nb::make_tuple(ev.t, self.constraints->name(ev.key), action_name(ev.action)));
-  }
-  return out;
 }
 
 // The extra goals (tasks/goals.hpp) and the objectives (loop/objectives.hpp).
@@ -347,11 +336,6 @@ void bind_session(nb::class_<PyTrackingRun>& run) {
       .def_prop_ro("last_orientation_error",
                    [](const PyTrackingRun& s) { return s.run->last_orientation_error(); },
                    "The primary task's orientation rows' error norm at the last sample [rad].")
-      .def_prop_ro("n_events",
-                   [](const PyTrackingRun& s) {
-                     return s.constraints ? static_cast<long>(s.constraints->events().size()) : 0L;
-                   },
-                   "The constraint events so far (0 without constraints).")
       .def(
           "move_obstacle",
           [](PyTrackingRun& s, const std::string& name, const Vec3& position,
@@ -367,8 +351,6 @@ void bind_session(nb::class_<PyTrackingRun>& run) {
           nb::arg("name"), nb::arg("position"), nb::arg("velocity"), nb::arg("rotation"),
           "Obstacle `name` at `position` [m] at the next sample's time, moving with "
           "`velocity` [m/s] from then on, rotated by `rotation` (3, 3).")
-      .def("events_since", &events_since, nb::arg("i"),
-           "Events i.. as (t, constraint, action) tuples (0 <= i <= n_events).")
       .def_prop_ro("active_names",
                    [](const PyTrackingRun& s) {
                      return s.constraints ? s.constraints->active_names()
@@ -392,10 +374,12 @@ void bind_tracking(nb::module_& m) {
            nb::arg("law"), nb::arg("stop"), nb::arg("t").noconvert().none() = nb::none(),
            nb::arg("t0") = 0.0, nb::arg("record"), nb::arg("joints"),
            nb::arg("constraints").none(), nb::arg("goals") = std::vector<GoalConfig>{},
+           nb::arg("events") = 0L,
            "model: the robot's pin.Model (borrowed); t: the time grid (N,) float64, read in "
            "place, or None: an open run (a controller's ticks, advance(k, k + 1), no last "
            "sample; times t0 + k dt; record a RecordArrays(ring=True)); record: the "
-           "Recorder's arrays; constraints: a ConstraintSetConfig or None.")
+           "Recorder's arrays; constraints: a ConstraintSetConfig or None; events: the "
+           "constraint events kept, the last ones (0: every one).")
       .def("advance", &advance, nb::arg("c0"), nb::arg("c1"), nb::arg("P_d").noconvert().none(),
            nb::arg("R_d").noconvert().none(), nb::arg("FF").noconvert(),
            nb::arg("at_rest").noconvert(), nb::arg("q").noconvert(),

@@ -27,6 +27,9 @@ Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& 
   if (!by_levels_) return;
   const int L = static_cast<int>(ends_.size());
   int start = 0;
+  // Built in place, never moved: an Eigen solver not yet computed has no defined info()
+  // to copy (UBSan: a load of an invalid ComputationInfo).
+  level_.reserve(static_cast<std::size_t>(L));
   for (int l = 0; l < L; ++l) {
     level_.emplace_back(ends_[l] - start, nv);
     level_.back().basis = l + 1 < L;

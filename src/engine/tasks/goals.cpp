@@ -244,6 +244,16 @@ Goals::Goals(const pinocchio::Model& model, const std::vector<GoalConfig>& goals
   }
 }
 
+TargetReader FrameGoalRun::target() const {
+  const bool pos = std::any_of(rows_.begin(), rows_.end(), [](int r) { return r < 3; });
+  const bool rot = std::any_of(rows_.begin(), rows_.end(), [](int r) { return r >= 3; });
+  return FrameTarget{pos, rot, rows_, true};
+}
+
+TargetReader Goals::target(int g) const {
+  return std::visit([](const auto& run) { return run.target(); }, runs_[g]);
+}
+
 void Goals::write(const GoalContext& c, const double* ref, const double* ff, ExtendedTask& ext,
                   int m0) {
   for (int g = 0; g < count(); ++g) {

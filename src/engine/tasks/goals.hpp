@@ -17,6 +17,8 @@
 //     void norms(const ExtendedTask& ext, int row0, double& first, double& second) const;
 //     // where each row of its Jacobian may not be zero: [lo[i], hi[i]) (law (10)'s sums)
 //     void columns(const pinocchio::Model&, int* lo, int* hi) const;
+//     // what it takes as a controller's target (tasks/targets.hpp)
+//     TargetReader target() const;
 //   };
 //
 // The run visits the goals' std::variant (GoalRun): no virtual call, nothing allocated
@@ -30,6 +32,7 @@
 #include <pinocchio/multibody/model.hpp>
 
 #include "tasks/extended_task.hpp"
+#include "tasks/targets.hpp"
 #include "types.hpp"
 
 namespace clik {
@@ -74,6 +77,7 @@ class FrameGoalRun {
              int row0);
   void norms(const ExtendedTask& ext, int row0, double& first, double& second) const;
   void columns(const pinocchio::Model& model, int* lo, int* hi) const;
+  TargetReader target() const;
   int frame() const { return frame_; }
   int relative_to() const { return relative_to_; }
 
@@ -93,6 +97,7 @@ class PostureGoalRun {
              int row0);
   void norms(const ExtendedTask& ext, int row0, double& first, double& second) const;
   void columns(const pinocchio::Model& model, int* lo, int* hi) const;
+  TargetReader target() const { return PostureTarget{rows()}; }
 
  private:
   std::vector<int> idx_q_, idx_v_;
@@ -108,6 +113,7 @@ class ComGoalRun {
              int row0);
   void norms(const ExtendedTask& ext, int row0, double& first, double& second) const;
   void columns(const pinocchio::Model& model, int* lo, int* hi) const;
+  TargetReader target() const { return FrameTarget{true, false, rows_, false}; }
 
  private:
   std::vector<int> rows_;
@@ -135,6 +141,9 @@ class Goals {
   int ref_size() const { return ref_size_; }  // D = sum d_g
   int rows_of(int g) const { return row_end_[g] - (g ? row_end_[g - 1] : 0); }
   int row_end(int g) const { return row_end_[g]; }  // relative to the first goal row
+  int ref_size_of(int g) const { return (g + 1 < count() ? ref_at_[g + 1] : ref_size_) - ref_at_[g]; }
+  // What goal g takes as a controller's target.
+  TargetReader target(int g) const;
   bool needs_com() const { return com_; }
   // Frames whose placements the goals read (with repeats).
   const std::vector<int>& frames() const { return frames_; }
