@@ -83,8 +83,21 @@ bench: $(VENV)/.installed
 # -fsanitize=undefined leaves it out), symbols kept (RelWithDebInfo, not stripped), with
 # the wheels' allocation settings (EIGEN_MALLOC_ALREADY_ALIGNED: pinocchio::Data is
 # allocated in the wheel's library and freed in the engine), into its own venv and build
-# folder; then the engine, constraint, solve, status, property, zoo and boundary tests
-# run under it. Reports go to files (pytest holds fd 2); any report fails the target.
+# folder, with clik._sanitize_probe (CLIK_SANITIZE_PROBE: reports on request, in no other
+# build). Then, under the sanitizers:
+#   1/2 a self-check: SAN_PROBE plants a UBSan report, then an ASan one; unless each fails
+#       its run and shows in its log, the target fails ("FAILED self-check").
+#   2/2 SAN_TESTS, `pytest -v`: the loop, constraint, solve, task, controller, zoo,
+#       bad-input, hardened-number, boundary and thread tests, every tests/*/ fuzz file,
+#       and SAN_PROBE (skipped; `CLIK_PLANT_SANITIZER=ubsan make sanitize` must fail).
+# GCC's UBSan runtime (libubsan.so.1) ignores UBSAN_OPTIONS=log_path and writes its
+# reports to fd 2: pytest runs with --capture=sys (fd 2 not captured), its output goes to
+# the terminal and to build/sanitize-logs/*.log, and .ci/sanitize-pytest reads the log
+# ("runtime error:", "ERROR: AddressSanitizer", "SUMMARY: ...Sanitizer"). UBSan keeps
+# going (one run lists every report); ASan's first report ends the run. A report or a
+# failed test fails the target, which lists the distinct reports; each part prints its
+# time and test count. A subprocess a test starts stops at its first UBSan report
+# (tests/conftest.py), so the test fails even when it captures that stderr.
 # Memory-budget and browser tests stay in `make test` (ASan's RSS; Chromium does not
 # start under the preload). See ../shared/NOTES.md, "Sanitizer builds of the engine".
 SAN_VENV  := .venv-sanitize
@@ -92,10 +105,17 @@ SAN_PY    := $(SAN_VENV)/bin/python
 SAN_PIP   := $(SAN_PY) -m pip --disable-pip-version-check
 SAN_LOG   := build/sanitize-logs
 SAN_FLAGS := -fsanitize=address,undefined -fsanitize=float-cast-overflow -fno-omit-frame-pointer -g -O1 -DEIGEN_MALLOC_ALREADY_ALIGNED=1
-SAN_TESTS := tests/loop tests/constraints tests/solving tests/tasks \
+SAN_PROBE := tests/robustness/test_sanitizer_probe.py
+SAN_TESTS := tests/loop tests/constraints tests/solving tests/tasks tests/control \
              tests/robustness/test_zoo.py tests/robustness/test_bad_input.py \
              tests/robustness/test_hardened_numbers.py $(wildcard tests/robustness/test_*boundary*.py) \
-             $(wildcard tests/robustness/test_*fuzz*.py) $(wildcard tests/robustness/test_threads*.py)
+             $(wildcard tests/*/test_*fuzz*.py) $(wildcard tests/robustness/test_threads*.py) $(SAN_PROBE)
+# pytest under the sanitizers: libasan preloaded, then libstdc++ (else the first C++
+# exception CHECK-fails); no leak check (Python leaks by design); fd 2 not captured.
+SAN_PYTEST = env LD_PRELOAD="$$(c++ -print-file-name=libasan.so) $$(c++ -print-file-name=libstdc++.so)" \
+             ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 CLIK_SANITIZE=1 \
+             $(SAN_PY) -u -m pytest -v -m "not browser" --capture=sys --timeout=900 -p no:cacheprovider
+SAN_RUN   := .ci/sanitize-pytest
 
 $(SAN_PY):
 	$(PYTHON) -m venv $(SAN_VENV)
@@ -103,22 +123,25 @@ $(SAN_PY):
 
 $(SAN_VENV)/.installed: $(SAN_PY) pyproject.toml $(ENGINE)
 	@command -v c++ >/dev/null 2>&1 || { echo "make sanitize compiles the engine: no C++ compiler found (Debian/Ubuntu: apt-get install g++)" >&2; exit 1; }
-	@echo "make sanitize: the engine with ASan + UBSan into $(SAN_VENV) (build/sanitize; several minutes the first time)"
+	@echo "make sanitize: the engine with ASan + UBSan into $(SAN_VENV) (build/sanitize; several tens of minutes the first time on 2 cores)"
 	$(SAN_PIP) install --quiet $(shell $(PYTHON) -c "import tomllib; print(' '.join(repr(r) for r in tomllib.load(open('pyproject.toml', 'rb'))['build-system']['requires']))") cmake ninja
-	$(SAN_PIP) install --quiet --no-build-isolation -e ".[test]" \
+	@start=$$(date +%s) && $(SAN_PIP) install --quiet --no-build-isolation -e ".[test]" \
 	    -C cmake.build-type=RelWithDebInfo -C build-dir=build/sanitize -C install.strip=false \
 	    -C cmake.define.CMAKE_CXX_FLAGS="$(SAN_FLAGS)" \
-	    -C cmake.define.CMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined"
+	    -C cmake.define.CMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
+	    -C cmake.define.CLIK_SANITIZE_PROBE=ON \
+	    && echo "make sanitize: the build took $$(( $$(date +%s) - start )) s"
 	touch $@
 
 sanitize: $(SAN_VENV)/.installed
-	rm -rf $(SAN_LOG) && mkdir -p $(SAN_LOG)
-	LD_PRELOAD="$$(c++ -print-file-name=libasan.so) $$(c++ -print-file-name=libstdc++.so)" \
-	ASAN_OPTIONS="detect_leaks=0:log_path=$(CURDIR)/$(SAN_LOG)/asan" \
-	UBSAN_OPTIONS="print_stacktrace=1:log_path=$(CURDIR)/$(SAN_LOG)/ubsan" \
-	CLIK_SANITIZE=1 $(SAN_PY) -m pytest $(SAN_TESTS) -m "not browser" --timeout=900 -q -p no:cacheprovider
-	@if [ -n "$$(ls -A $(SAN_LOG))" ]; then echo "make sanitize: sanitizer reports:" >&2; cat $(SAN_LOG)/* >&2; exit 1; fi
-	@echo "make sanitize: no sanitizer report"
+	@rm -rf $(SAN_LOG) && mkdir -p $(SAN_LOG)
+	@echo "make sanitize: 1/2 self-check: a planted UBSan report, then an ASan one, must each fail its run ($(SAN_PROBE))"
+	@CLIK_PLANT_SANITIZER=ubsan $(SAN_RUN) --planted UBSan 'sanitize_probe\.cpp:[0-9]+:[0-9]+: runtime error: signed integer overflow' \
+	    $(SAN_LOG)/planted-ubsan.log $(SAN_PYTEST) $(SAN_PROBE)
+	@CLIK_PLANT_SANITIZER=asan $(SAN_RUN) --planted ASan 'SUMMARY: AddressSanitizer: heap-buffer-overflow .*sanitize_probe\.cpp' \
+	    $(SAN_LOG)/planted-asan.log $(SAN_PYTEST) $(SAN_PROBE)
+	@echo "make sanitize: 2/2 the engine's tests under the sanitizers (log: $(SAN_LOG)/tests.log)"
+	@$(SAN_RUN) $(SAN_LOG)/tests.log $(SAN_PYTEST) $(SAN_TESTS)
 
 clean:
 	rm -rf out .pytest_cache build
