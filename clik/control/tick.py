@@ -17,9 +17,10 @@ VERDICTS = ("ok", "deadlock", "violated", "diverged", "off_track")
 class Tick(metaclass=ABCMeta):
     """One tick: the next joints, this tick's events and errors, and a verdict.
 
-    The compiled engine's one-task fast path returns its own form, ``clik._engine.Tick``,
-    with the same attributes (read-only but ``reason``); ``isinstance(tick, Tick)`` holds
-    for both.
+    The compiled engine returns its own form, ``clik._engine.Tick``, with the same
+    attributes (read-only); ``isinstance(tick, Tick)`` holds for both. A tick's arrays are
+    its own (the compiled engine's view the tick's own copy): keep them, write into them,
+    nothing else changes.
 
     Attributes:
         q: ``q_{k+1}``, the joints to command next (nq,) [rad or m]; ``q_k`` itself
