@@ -286,3 +286,68 @@ def test_every_constant_both_engines_declare_is_checked_to_agree():
     checked = {attribute for _, attribute in SHARED.values()}
     assert sorted((cxx & python) - checked) == []
     assert cxx & python  # the scan finds the shared ones (STEP_BUDGET, ...)
+
+
+# -- kinds of task: named only in their own modules ---------------------------------------
+
+
+def task_kind_modules() -> dict[str, str]:
+    """Each ``[[tasks]] kind`` name and the module of the class that reads it."""
+    from clik.tasks.registry import TASK_KINDS
+
+    return {name: kind.__module__ for kind in TASK_KINDS for name in kind.names}
+
+
+def kind_names_compared(path: Path, names: set[str]) -> list[tuple[int, str]]:
+    """``(line, name)`` of each task-kind name compared as a string literal in ``path``
+    (``x == "posture"``, ``kind in ("com", ...)``, ``x != "pose"``)."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if not isinstance(node, ast.Compare):
+            continue
+        for side in [node.left, *node.comparators]:
+            items = side.elts if isinstance(side, ast.Tuple | ast.List | ast.Set) else [side]
+            for item in items:
+                if isinstance(item, ast.Constant) and item.value in names:
+                    found.append((node.lineno, str(item.value)))
+    return found
+
+
+def test_the_kind_name_pattern(tmp_path):
+    probe = tmp_path / "probe.py"
+    probe.write_text('if kind == "posture" or kind in ("com", "x"):\n    pass\nkind = "pose"\n')
+    assert kind_names_compared(probe, {"posture", "com", "pose"}) == [(1, "posture"), (1, "com")]
+
+
+def test_a_task_kind_is_named_only_in_its_own_module():
+    """No module compares a task kind's name as a string but the kind's own: the loop, the
+    laws, the controller, the scenarios, the summary and the views ask the kind."""
+    owners = task_kind_modules()
+    found = [
+        f"{name}:{line}: {kind!r}"
+        for name, path in MODULES.items()
+        for line, kind in kind_names_compared(path, set(owners))
+        if owners[kind] != name
+    ]
+    assert found == []
+
+
+def test_every_task_kind_is_registered_and_whole():
+    """Every BaseTask class under clik/tasks is in the registry, with no abstract part left."""
+    import inspect
+
+    from clik.tasks.kind import BaseTask
+    from clik.tasks.registry import TASK_KINDS
+
+    defined = {
+        cls
+        for name in MODULES
+        if name.startswith("clik.tasks.")
+        for cls in vars(__import__(name, fromlist=["_"])).values()
+        if inspect.isclass(cls)
+        and issubclass(cls, BaseTask)
+        and cls is not BaseTask
+        and cls.__module__ == name
+    }
+    assert defined == set(TASK_KINDS)
+    assert [k.__name__ for k in TASK_KINDS if inspect.isabstract(k)] == []

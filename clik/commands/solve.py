@@ -56,7 +56,8 @@ def _number(value: float | None, spec: str) -> str:
 
 def print_summary(name: str, summary: dict) -> None:
     """A few lines for a person."""
-    unit = "rad" if summary["info"].get("task") == "orientation" else "m"
+    primary = next(iter((summary.get("task_errors") or {"": {}}).values()))
+    unit = primary.get("unit", "m")  # the primary task's, as its kind says
     print(f"{name}: {summary['status']} ({summary['reason']})")
     print(
         f"  steps {summary['steps']}, wall time {_number(summary['wall_time_s'], '.3f')} s, "
@@ -86,9 +87,9 @@ def print_summary(name: str, summary: dict) -> None:
 def print_task_errors(summary: dict) -> None:
     """One line per task of a several-task run: name, kind, priority, max and final errors.
 
-    A run of one task (``task_errors`` is ``{"task": ...}``) says nothing more. Units:
-    ``info["task_units"]`` (the scenario's run), else [rad] for an orientation task and
-    [m] for the others; a pose task adds its orientation rows' errors [rad].
+    A run of one task (``task_errors`` is ``{"task": ...}``) says nothing more. Each
+    entry's unit is what its kind says (``unit``; a second norm, a pose task's orientation
+    errors, its ``second_unit``).
     """
     errors = summary.get("task_errors") or {}
     if list(errors) in ([], ["task"]):
@@ -96,15 +97,17 @@ def print_task_errors(summary: dict) -> None:
     units = summary["info"].get("task_units", {})
     width = max(len(name) for name in errors)
     for name, e in errors.items():
-        unit = units.get(name, "rad" if e.get("kind") == "orientation" else "m")
+        unit = e.get("unit", units.get(name, "m"))
         line = (
             f"  task {name:<{width}}  {e.get('kind', '?'):<11} priority {e.get('priority', '?')}"
             f"  max {_number(e['max'], '.3e')} {unit}, final {_number(e['final'], '.3e')} {unit}"
         )
         if "max_orientation" in e:
+            second = e.get("second_unit", "rad")
             line += (
-                f"; orientation max {_number(e['max_orientation'], '.3e')} rad, "
-                f"final {_number(e['final_orientation'], '.3e')} rad"
+                f"; {e.get('second_error', 'orientation error').split()[0]} max "
+                f"{_number(e['max_orientation'], '.3e')} {second}, "
+                f"final {_number(e['final_orientation'], '.3e')} {second}"
             )
         print(line)
 

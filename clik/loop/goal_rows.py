@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 
     from clik.loop.task_stack import TaskStack
     from clik.tasks.extended_task import ExtendedTask
+    from clik.tasks.kind import BaseTask
 
 GoalChunk = tuple[np.ndarray, np.ndarray]
 
@@ -43,7 +44,7 @@ class GoalChunks:
         self.goals, self.names = stack.extras, stack.names[1:]
         self.t, self.size = t, size
         self.D = sum(g.task.reference_size for g in self.goals)
-        self.M = sum(g.task.m for g in self.goals)
+        self.M = sum(g.task.ff_size for g in self.goals)
         self._kept: dict[int, GoalChunk] = {}
         keep = t.shape[0] <= KEEP_SAMPLES
         for c0 in range(0, t.shape[0], size):
@@ -69,9 +70,9 @@ class GoalChunks:
                     f"{task.reference_size} finite values per sample", shape,
                 )  # fmt: skip
             REF[:, d : d + task.reference_size] = ref
-            FF[:, mm : mm + task.m] = ff
+            FF[:, mm : mm + task.ff_size] = ff
             d += task.reference_size
-            mm += task.m
+            mm += task.ff_size
         return REF, FF
 
     def load(self, c0: int) -> GoalChunk:
@@ -97,9 +98,8 @@ class GoalRows:
         self.goals = stack.extras
         self.G = len(self.goals)
         self.rows = [(o, o + g.task.m) for o, g in zip(stack.offsets[1:], self.goals, strict=True)]
-        sizes = [g.task.reference_size for g in self.goals]
-        starts = np.cumsum([0, *sizes])
-        self.refs = [(int(a), int(b)) for a, b in itertools.pairwise(starts)]
+        self.refs = _spans([g.task.reference_size for g in self.goals])
+        self.ffs = _spans([g.task.ff_size for g in self.goals])
         self.first_level = [lv == 1 for lv in stack.levels[1:]]
         self.record = np.zeros((capacity, self.G, 2))
         self.largest = np.zeros((self.G, 2))
@@ -110,10 +110,11 @@ class GoalRows:
         ff: np.ndarray, ext: ExtendedTask,
     ) -> None:  # fmt: skip
         """Write each extra goal's rows (J, e, feed-forward) at ``q`` (this sample's ``ref``)."""
-        m0 = self.rows[0][0] if self.rows else ext.m
-        for goal, (a, b), (ra, rb) in zip(self.goals, self.rows, self.refs, strict=True):
-            goal.task.fill(model, data, q, ref[ra:rb], ext.J[a:b], ext.e[a:b])
-            ext.ff[a:b] = ff[a - m0 : b - m0]
+        spans = zip(self.goals, self.rows, self.refs, self.ffs, strict=True)
+        for goal, (a, b), (ra, rb), (fa, fb) in spans:
+            goal.task.fill(
+                model, data, q, ref[ra:rb], ff[fa:fb], ext.J[a:b], ext.e[a:b], ext.ff[a:b]
+            )
 
     def errors(self, ext: ExtendedTask) -> float:
         """Keep this sample's error norms; returns the largest of the first level's."""
@@ -132,25 +133,26 @@ class GoalRows:
 
 
 def task_errors(
-    stack: TaskStack | None, primary: dict[str, Any], rows: GoalRows | None
+    stack: TaskStack | None, task: BaseTask, primary: dict[str, Any], rows: GoalRows | None
 ) -> dict[str, Any]:
     """``{name: {max, final, ...}}`` of every task of a run (the ``task_errors`` summary key).
 
+    Each entry has its numbers and the words of its kind (:func:`norm_words`).
+
     Args:
         stack: The run's tasks (None: one task, named ``"task"``).
+        task: The primary task.
         primary: The primary task's ``max``, ``final`` (and orientation) numbers.
         rows: The extra goals' errors (None without).
     """
     if stack is None:
-        return {"task": primary}
+        return {"task": {**primary, **norm_words(task)}}
     out = {stack.names[0]: {**primary, **_about(stack, 0)}}
     if rows is None:
         return out
-    for i, goal in enumerate(rows.goals):
+    for i in range(rows.G):
         entry: dict[str, Any] = {"max": float(rows.largest[i, 0]), "final": float(rows.last[i, 0])}
-        if getattr(goal.task, "has_orientation", False) and getattr(
-            goal.task, "has_position", False
-        ):
+        if stack.goals[i + 1].task.norms[1] is not None:
             entry["max_orientation"] = float(rows.largest[i, 1])
             entry["final_orientation"] = float(rows.last[i, 1])
         out[stack.names[i + 1]] = {**entry, **_about(stack, i + 1)}
@@ -158,5 +160,25 @@ def task_errors(
 
 
 def _about(stack: TaskStack, i: int) -> dict[str, Any]:
+    """A task's words in ``task_errors``: kind, priority, what it is, what its norms measure."""
     goal = stack.goals[i]
-    return {"kind": goal.task.kind, "priority": int(goal.priority), "task": goal.task.describe()}
+    about = {"kind": goal.task.kind, "priority": int(goal.priority), "task": goal.task.describe()}
+    return {**about, **norm_words(goal.task)}
+
+
+def norm_words(task: BaseTask) -> dict[str, str]:
+    """What a task's error norms measure, as ``task_errors`` says it.
+
+    ``error`` and ``unit``; ``second_error`` and ``second_unit`` for a second norm.
+    """
+    first, second = task.norms
+    out = {"error": first.what, "unit": first.unit}
+    if second is not None:
+        out.update(second_error=second.what, second_unit=second.unit)
+    return out
+
+
+def _spans(sizes: list[int]) -> list[tuple[int, int]]:
+    """``[start, end)`` of consecutive blocks of ``sizes``."""
+    starts = np.cumsum([0, *sizes])
+    return [(int(a), int(b)) for a, b in itertools.pairwise(starts)]

@@ -14,6 +14,7 @@ from clik.constraints.dexterity import dexterity_row
 from clik.loop.goal_rows import GoalChunks, GoalRows
 from clik.loop.reference_stream import rows_at_rest
 from clik.objectives import gradients
+from clik.objectives.objective import JOINT_CENTERING, POSTURE
 
 if TYPE_CHECKING:
     import pinocchio as pin
@@ -78,12 +79,12 @@ class GoalState:
         """
         out = []
         for (level, obj, setup), z in zip(self.objectives, self._z, strict=True):
-            if obj.kind == "joint_centering":
+            if obj.kind == JOINT_CENTERING:
                 gradients.joint_centering(
                     q, setup["idx_q"], setup["idx_v"], setup["center"], setup["half_range"],
                     obj.gain, z,
                 )  # fmt: skip
-            elif obj.kind == "posture":
+            elif obj.kind == POSTURE:
                 gradients.posture(model, q, setup["q_ref"], obj.gain, z)
             else:
                 task = self.task

@@ -2,14 +2,16 @@
 
 docs/method.md, "Several tasks". The goals' rows are stacked into the task part of the
 extended task (24)-(25), level by level (priority 1 first); the run's *primary* task
-is the first frame task (:class:`~clik.tasks.task.Task`) of the first level: its rows
-come first, its trail is the run's ``position``, and the constraint kinds that guard
-"the task" (workspace, cone, dexterity) read it.
+is the first task of the first level that may lead (its kind says: a frame task in the
+world, :attr:`~clik.tasks.kind.BaseTask.leads`): its rows come first, its trail is the
+run's ``position``, and the constraint kinds that guard "the task" (workspace, cone,
+dexterity) read it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,7 +19,9 @@ from clik.errors import InputError
 from clik.loop.gains import row_gains
 from clik.objectives.objective import Objective
 from clik.tasks.goal import Goal
-from clik.tasks.task import Task
+
+if TYPE_CHECKING:
+    from clik.tasks.task import Task
 
 
 class TaskStack:
@@ -55,7 +59,7 @@ class TaskStack:
             raise InputError("tasks", "tasks on one robot (the same clik.Robot)")
         priorities = sorted({int(g.priority) for g in goals})
         top = [i for i, g in enumerate(goals) if g.priority == priorities[0]]
-        first = next((i for i in top if type(goals[i].task) is Task), None)
+        first = next((i for i in top if goals[i].task.leads), None)
         if first is None:
             raise InputError(
                 "tasks", f"a frame task (clik.Task) at priority {priorities[0]}, the run's "
@@ -143,8 +147,8 @@ def checked_tasks(
     if bad or isinstance(objectives, Objective):
         raise InputError("objectives", "a list of clik.Objective", bad[0] if bad else "Objective")
     stack = None if tasks is None else TaskStack(tasks, gain)
-    primary = task if stack is None else stack.primary.task
-    if type(primary) is not Task:
+    primary: Any = task if stack is None else stack.primary.task
+    if not primary.leads:
         expected = "a clik.Task (a frame in the world); other kinds go in tasks=[...] beside one"
         raise InputError("task", expected, type(primary).__name__)
     if law != "pseudoinverse":

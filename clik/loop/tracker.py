@@ -37,6 +37,7 @@ from clik.objectives.objective import Objective
 from clik.outputs.result import TrackingResult
 from clik.tasks.extended_task import ExtendedTask
 from clik.tasks.goal import Goal
+from clik.tasks.kind import BaseTask
 from clik.tasks.task import Task
 from clik.trajectory import Trajectory, time_grid
 
@@ -120,7 +121,7 @@ class Tracker:
     ) -> None:
         if engine not in ENGINES:
             raise InputError("engine", " or ".join(repr(e) for e in ENGINES), engine)
-        if task is not None and not isinstance(task, Task):
+        if task is not None and not (isinstance(task, BaseTask) and task.leads):
             raise InputError("task", "a clik.Task", type(task).__name__)
         task, self.stack, self.objectives = checked_tasks(task, tasks, objectives, law, gain)
         task.robot.check_model()

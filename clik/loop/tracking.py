@@ -448,7 +448,7 @@ class _Run:
             primary["max_orientation"] = float(np.max(o))
             primary["final_orientation"] = float(o[-1])
         rows = self.goals.rows
-        result.task_errors = task_errors(self.tr.stack, primary, rows)
+        result.task_errors = task_errors(self.tr.stack, self.task, primary, rows)
         if rows is not None:
             result.extra["task_errors"] = rows.record[self.rec.order()].copy()
             result.info["tasks"] = list(result.task_errors)

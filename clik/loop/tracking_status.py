@@ -181,14 +181,22 @@ def _stretches(over: np.ndarray) -> list[tuple[int, int]]:
 
 
 def _errors(result: TrackingResult, tol: Tolerance) -> list[tuple[str, str, float, np.ndarray]]:
-    """Each recorded error with its name, unit and tolerance."""
-    orientation_only = result.info.get("task") == "orientation"
-    if orientation_only:
-        return [("orientation error", "rad", tol.orientation, result.task_error_norm)]
-    out = [("task error", "m", tol.position, result.task_error_norm)]
-    if result.orientation_error_norm is not None:
-        out.append(("orientation error", "rad", tol.orientation, result.orientation_error_norm))
+    """Each recorded error with its name, unit and tolerance (its kind's words: ``task_errors``)."""
+    entries = list(result.task_errors.items())
+    primary = entries[0][1] if entries else {}
+    unit = str(primary.get("unit", "m"))
+    name = "task error" if unit == "m" else str(primary.get("error", "task error"))
+    out = [(name, unit, _tolerance(tol, unit), result.task_error_norm)]
+    if result.orientation_error_norm is not None and "second_unit" in primary:
+        second = str(primary["second_unit"])
+        label = str(primary.get("second_error", "orientation error"))
+        out.append((label, second, _tolerance(tol, second), result.orientation_error_norm))
     return out + _other_tasks_errors(result, tol)
+
+
+def _tolerance(tol: Tolerance, unit: str) -> float:
+    """The tolerance of an error in ``unit``: the position one for [m], else the orientation one."""
+    return tol.position if unit == "m" else tol.orientation
 
 
 def _other_tasks_errors(
@@ -204,15 +212,12 @@ def _other_tasks_errors(
     for i, (name, entry) in enumerate(entries):
         if int(entry.get("priority", 1)) != top:
             continue
-        kind = entry.get("kind")
-        if kind in ("orientation", "posture"):
-            unit = "rad" if kind == "orientation" else "rad or m"
-            out.append((f"error of task {name!r}", unit, tol.orientation, record[:, i, 0]))
-            continue
-        out.append((f"error of task {name!r}", "m", tol.position, record[:, i, 0]))
-        if "max_orientation" in entry:
-            label = f"orientation error of task {name!r}"
-            out.append((label, "rad", tol.orientation, record[:, i, 1]))
+        unit = str(entry.get("unit", "m"))
+        out.append((f"error of task {name!r}", unit, _tolerance(tol, unit), record[:, i, 0]))
+        if "second_unit" in entry:
+            second = str(entry["second_unit"])
+            label = f"{entry.get('second_error', 'orientation error')} of task {name!r}"
+            out.append((label, second, _tolerance(tol, second), record[:, i, 1]))
     return out
 
 

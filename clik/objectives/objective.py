@@ -15,6 +15,7 @@ if TYPE_CHECKING:
 
 ObjectiveKind = Literal["joint_centering", "manipulability", "posture"]
 OBJECTIVE_KINDS: tuple[str, ...] = ("joint_centering", "manipulability", "posture")
+JOINT_CENTERING, MANIPULABILITY, POSTURE = OBJECTIVE_KINDS
 
 
 class Objective:
@@ -58,7 +59,7 @@ class Objective:
             raise InputError(
                 "objectives.priority", "an integer >= 1, or None (the lowest)", priority
             )
-        if posture is not None and kind != "posture":
+        if posture is not None and kind != POSTURE:
             raise InputError("objectives.posture", "a posture only for kind 'posture'", kind)
         self.kind: ObjectiveKind = kind
         self.gain = k
@@ -82,9 +83,9 @@ class Objective:
             InputError: A posture of the wrong size or outside the limits, or no joint
                 with finite limits to centre.
         """
-        if self.kind == "joint_centering":
+        if self.kind == JOINT_CENTERING:
             return centering_setup(robot)
-        if self.kind == "posture":
+        if self.kind == POSTURE:
             q_ref = (
                 q0
                 if self.posture is None

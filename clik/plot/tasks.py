@@ -5,10 +5,10 @@ A run with ``tasks=[clik.Goal(...), ...]`` records its primary task's error norm
 tasks' (``result.extra["task_errors"]``, (N, G, 2): ``(first, second)`` per task, in
 the order of ``result.info["tasks"][1:]``). Each task's error is drawn as the error
 plots draw the primary's (:func:`~clik.plot.series.tracking_error`): against time, on a
-log scale, zero samples left out. The first norm is the position error [m] of a frame,
-relative or centre-of-mass task, the orientation error [rad] of an orientation task,
-the joints' error [rad or m] of a posture task; a pose task's orientation error [rad]
-is drawn dashed on the same panel.
+log scale, zero samples left out, labelled with what its kind says its norms measure
+(``task_errors[name]["error"]`` and ``["unit"]``: the position error [m] of a frame, the
+joints' error [rad] of a posture...); a second norm (a pose task's orientation error
+[rad]) is drawn dashed on the same panel.
 """
 
 from __future__ import annotations
@@ -25,15 +25,6 @@ from clik.errors import InputError
 from clik.outputs.result import TrackingResult
 from clik.plot._common import Results, as_list, colors, draw_events, finish, new_figure, run_labels
 
-FIRST_NORM = {
-    "pose": ("position", "m"),
-    "position": ("position", "m"),
-    "com": ("position", "m"),
-    "orientation": ("orientation", "rad"),
-    "posture": ("joints", "rad or m"),
-}
-"""A task kind's first error norm: what it measures and its unit."""
-
 PANEL_SIZE = (6.0, 3.0)
 """Size of one panel of :func:`task_errors` [in]."""
 
@@ -44,11 +35,11 @@ class TaskSeries:
 
     Attributes:
         name: The task's name.
-        kind: Its kind (``"pose"``, ``"position"``, ``"orientation"``, ``"posture"``,
-            ``"com"``).
+        kind: Its kind (``"pose"``, ``"posture"``, ...).
         priority: Its priority (1 is the highest).
         first: The first norm at each recorded sample (N,) (see the module docstring).
-        second: A pose task's orientation error (N,) [rad]; None for other kinds.
+        second: The second norm (N,) (a pose task's orientation error [rad]), or None.
+        words: What each measures and its unit: ``((what, unit), (what, unit) or None)``.
     """
 
     name: str
@@ -56,6 +47,7 @@ class TaskSeries:
     priority: int
     first: np.ndarray
     second: np.ndarray | None
+    words: tuple[tuple[str, str], tuple[str, str] | None]
 
 
 def task_names(result: TrackingResult) -> list[str]:
@@ -81,8 +73,14 @@ def task_series(result: TrackingResult) -> dict[str, TaskSeries]:
         )
     for i, name in enumerate(names):
         entry = entries.get(name, {})
-        kind = str(entry.get("kind", result.info.get("task", "position")))
+        kind = str(entry.get("kind", result.info.get("task", "")))
         both = "max_orientation" in entry
+        words = (
+            (str(entry.get("error", "error")), str(entry.get("unit", ""))),
+            (str(entry.get("second_error", "orientation error")), str(entry["second_unit"]))
+            if "second_unit" in entry
+            else None,
+        )
         if i == 0:
             first = np.asarray(result.task_error_norm, dtype=float)
             o = result.orientation_error_norm
@@ -91,7 +89,7 @@ def task_series(result: TrackingResult) -> dict[str, TaskSeries]:
             assert record is not None
             first = np.asarray(record[:, i - 1, 0], dtype=float)
             second = np.asarray(record[:, i - 1, 1], dtype=float) if both else None
-        out[name] = TaskSeries(name, kind, int(entry.get("priority", 1)), first, second)
+        out[name] = TaskSeries(name, kind, int(entry.get("priority", 1)), first, second, words)
     return out
 
 
@@ -133,7 +131,7 @@ def task_error(
         if series is None:
             continue
         drawn = series
-        what, unit = FIRST_NORM.get(series.kind, ("error", ""))
+        (what, unit), second_words = series.words
         prefix = f"{label}: " if len(runs) > 1 else ""
         first_label = f"{prefix}{what} [{unit}]"
         line = ax.plot(r.t, _positive(series.first, log), color=color, label=first_label)
@@ -141,7 +139,8 @@ def task_error(
         if series.second is not None:
             line = ax.plot(
                 r.t, _positive(series.second, log), color=color, linestyle="--",
-                label=f"{prefix}orientation [rad]",
+                label=f"{prefix}{second_words[0]} [{second_words[1]}]"
+                if second_words is not None else f"{prefix}orientation [rad]",
             )  # fmt: skip
             line[0].set_gid("orientation")
         if events:
@@ -151,8 +150,10 @@ def task_error(
         raise InputError("name", f"a task of the results, one of {known}", name)
     if log:
         ax.set_yscale("log")
-    unit = FIRST_NORM.get(drawn.kind, ("error", ""))[1]
-    ylabel = f"|e| [{unit}]" if drawn.second is None else "|e| [m], [rad]"
+    (_, unit), second_words = drawn.words
+    ylabel = f"|e| [{unit}]"
+    if drawn.second is not None:
+        ylabel += f", [{second_words[1] if second_words is not None else 'rad'}]"
     ax.set_title(f"{name} ({drawn.kind}, priority {drawn.priority})")
     return finish(ax, ylabel, events, which="both")
 

@@ -28,13 +28,7 @@ from clik.loop.tracking import ProgressCallback
 from clik.model.reach import reach_bound
 from clik.model.robot import Robot
 from clik.outputs.result import TrackingResult
-from clik.scenarios.build_tasks import (
-    SeveralTasks,
-    build_objectives,
-    build_several,
-    build_trajectory,
-    error_unit,
-)
+from clik.scenarios.build_tasks import SeveralTasks, build_objectives, build_several
 from clik.scenarios.scenario import Scenario, check_dt, load_scenario
 from clik.schema import Table
 from clik.speed.speed_limits import SpeedLimits
@@ -94,7 +88,7 @@ class Run:
             result.info["robot_base"] = self.scenario.robot["base"]
             result.info["robot_base_speed"] = self.scenario.robot.get("base_speed")
         if self.goals:
-            result.info["task_units"] = {str(g.name): error_unit(g.task) for g in self.goals}
+            result.info["task_units"] = {str(g.name): g.task.norms[0].unit for g in self.goals}
         return result
 
 
@@ -194,9 +188,8 @@ def _single_task(scenario: Scenario, robot: Robot, q0: np.ndarray) -> tuple[Task
         raise _where(scenario, "task.frame", exc) from None
     except InputError as exc:
         raise _where(scenario, exc.field, exc) from None
-    start = task.placement(q0)
     try:
-        return task, build_trajectory(scenario.trajectory, task, start)
+        return task, task.trajectory_from(scenario.trajectory, q0)
     except InputError as exc:
         _check_goal_reach(scenario, robot, task)  # name the real cause first
         raise _where(scenario, f"trajectory.{exc.field}", exc) from None

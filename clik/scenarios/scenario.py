@@ -42,7 +42,7 @@ from clik.errors import ScenarioError
 from clik.model.base import BASES, FIXED, check_base_speed
 from clik.model.joints import JointValues
 from clik.model.xacro_expand import is_xacro
-from clik.scenarios.fields import UNITS, angle_scale, gain_value, strings, trajectory_table
+from clik.scenarios.fields import gain_value
 from clik.scenarios.speed_tables import joint_speed_table, velocity_limits_table
 from clik.scenarios.task_tables import finish_tasks, primary, read_objectives, read_tasks
 from clik.scenarios.tolerance import read_tolerance
@@ -54,6 +54,8 @@ from clik.schema import (
     MIN_SAMPLES,
     Table,
 )
+from clik.tasks.task import frame_table, has_orientation_rows
+from clik.trajectory.tables import UNITS, angle_scale, strings, trajectory_table
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -196,17 +198,9 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
 def _single_task(top: Table, folder: Path) -> tuple[dict[str, Any], dict[str, Any]]:
     """``[task]`` and ``[trajectory]``: one frame task and its trajectory."""
     tsk = top.table("task", required=True)
-    task = {
-        "frame": tsk.string("frame"),
-        "kind": tsk.string("kind", "pose", ("position", "orientation", "pose")),
-        "axes": strings(tsk, "axes") or None,
-    }
-    if tsk.has("axes") and task["axes"] is None:
-        raise tsk.error("axes", "a non-empty list of axis names (omit it for every axis)", [])
+    task = frame_table(tsk)
     tsk.done()
-    has_orientation = task["kind"] != "position" and (
-        task["axes"] is None or any(a.startswith("r") for a in task["axes"])
-    )
+    has_orientation = has_orientation_rows(task["kind"], task["axes"])
     return task, trajectory_table(top.table("trajectory", required=True), folder, has_orientation)
 
 

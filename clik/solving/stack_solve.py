@@ -157,11 +157,12 @@ def _checked(
 def _largest_errors(entries: list[dict[str, Any]]) -> tuple[float, float]:
     """The largest final position [m] and orientation [rad] errors of ``task_errors`` entries.
 
-    An orientation task's error, and a posture's [rad or m], count as orientation.
+    An error in metres counts as position, any other (an orientation task's [rad], a
+    posture's [rad or m], a gaze angle) as orientation: each entry's unit is its kind's.
     """
     pos = rot = 0.0
     for e in entries:
-        if e["kind"] in ("orientation", "posture"):
+        if e.get("unit", "m") != "m":
             rot = max(rot, e["final"])
         else:
             pos = max(pos, e["final"])

@@ -15,11 +15,16 @@ import numpy as np
 import pinocchio as pin
 
 from clik.errors import InputError
-from clik.tasks.kind import BaseTask
+from clik.tasks.kind import BaseTask, Norm
 from clik.tasks.targets import FrameTarget
+from clik.trajectory.tables import build_trajectory, strings, trajectory_table
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from clik.model.robot import Robot
+    from clik.schema import Table
+    from clik.trajectory.base import Trajectory
 
 COM_AXES = ("x", "y", "z")
 
@@ -35,6 +40,7 @@ class ComTask(BaseTask):
         InputError: Bad axes, or a robot without mass.
     """
 
+    names = ("com",)
     kind = "com"
     has_position = True
     has_orientation = False
@@ -59,6 +65,47 @@ class ComTask(BaseTask):
     def axes(self) -> list[str]:
         """The kept axes."""
         return [COM_AXES[i] for i in self.rows]
+
+    # -- the scenario: [[tasks]] kind = "com" --------------------------------------------
+
+    @classmethod
+    def read_table(cls, t: Table, folder: Path) -> dict[str, Any]:
+        """``axes`` (default every one) and a position ``[tasks.trajectory]`` (optional).
+
+        The trajectory takes :func:`clik.trajectory.tables.trajectory_table`'s keys;
+        without one the centre of mass of the start is held.
+        """
+        axes = strings(t, "axes") or None
+        if t.has("axes") and (
+            axes is None or not set(axes) <= set(COM_AXES) or len(set(axes)) != len(axes)
+        ):
+            raise t.error("axes", f"distinct names among {list(COM_AXES)}", axes)
+        tr = t.table("trajectory")
+        held = {"kind": "hold", "start": None, "goal": None, "duration": 0.0, "goal_rpy": None}
+        return {
+            "axes": axes,
+            "trajectory": trajectory_table(tr, folder, False) if tr.data else held,
+        }
+
+    @classmethod
+    def from_spec(cls, robot: Robot, spec: dict[str, Any]) -> BaseTask:
+        """The centre of mass on the table's axes."""
+        return cls(robot, spec["axes"])
+
+    def trajectory_from(self, spec: dict[str, Any], q0: np.ndarray) -> Trajectory:
+        """The table's position trajectory from the centre of mass at ``q0``."""
+        return build_trajectory(spec, pin.SE3(np.eye(3), self.position(q0)), True, False)
+
+    @property
+    def norms(self) -> tuple[Norm, Norm | None]:
+        """The centre of mass's error [m]."""
+        return Norm("centre of mass error", "m"), None
+
+    def trail(
+        self, model: pin.Model, data: pin.Data, ref: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """The centre of mass and its reference [m]."""
+        return np.array(data.com[0], dtype=float), ref[:3].copy()
 
     def tick_target(self) -> FrameTarget:
         """A position (3,) [m] (or a pose's), and its velocity (:mod:`clik.tasks.targets`)."""
@@ -88,9 +135,10 @@ class ComTask(BaseTask):
 
     def fill(
         self, model: pin.Model, data: pin.Data, q: np.ndarray, ref: np.ndarray,
-        J: np.ndarray, e: np.ndarray,
+        ff: np.ndarray, J: np.ndarray, e: np.ndarray, xdot: np.ndarray,
     ) -> None:  # fmt: skip
-        """``e = c_d - c`` and ``J_com`` rows."""
+        """``e = c_d - c``, ``J_com`` rows and the feed-forward."""
+        xdot[:] = ff
         Jc = pin.jacobianCenterOfMass(model, data, q, False)
         np.take(ref - data.com[0], self.rows, out=e)
         np.take(Jc, self.rows, axis=0, out=J)

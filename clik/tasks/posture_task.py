@@ -17,14 +17,19 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clik.errors import InputError
-from clik.model.joints import CONTINUOUS, PRISMATIC, REVOLUTE
-from clik.tasks.kind import BaseTask
-from clik.tasks.targets import PostureTarget
+from clik.model.joints import CONTINUOUS, PRISMATIC, REVOLUTE, unit_scale
+from clik.tasks.kind import BaseTask, Norm
+from clik.tasks.targets import ValuesTarget
+from clik.trajectory.tables import joint_path, joint_trajectory_table, strings
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     import pinocchio as pin
 
     from clik.model.robot import Robot
+    from clik.schema import Table
+    from clik.trajectory.base import Trajectory
 
 
 class PostureTask(BaseTask):
@@ -45,6 +50,7 @@ class PostureTask(BaseTask):
         continuous: Whether each is continuous (``(cos, sin)`` in ``q``).
     """
 
+    names = ("posture",)
     kind = "posture"
 
     def __init__(self, robot: Robot, joints: Sequence[str] | None = None) -> None:
@@ -79,9 +85,9 @@ class PostureTask(BaseTask):
         """The joints' names."""
         return list(self.joints)
 
-    def tick_target(self) -> PostureTarget:
+    def tick_target(self) -> ValuesTarget:
         """The joints' values (m,) and velocities (:mod:`clik.tasks.targets`)."""
-        return PostureTarget(self.m)
+        return ValuesTarget(self.m)
 
     def __repr__(self) -> str:
         return f"PostureTask(joints={self.joints})"
@@ -98,6 +104,43 @@ class PostureTask(BaseTask):
         if c.any():
             out[c] = np.arctan2(q[self.idx_q[c] + 1], q[self.idx_q[c]])
         return out
+
+    # -- the scenario: [[tasks]] kind = "posture" ----------------------------------------
+
+    @classmethod
+    def read_table(cls, t: Table, folder: Path) -> dict[str, Any]:
+        """``joints`` (default every one-DoF joint) and a joint-space ``[tasks.trajectory]``.
+
+        The trajectory (optional: default, hold the start) takes
+        :func:`clik.trajectory.tables.joint_trajectory_table`'s keys: a hold of ``values``,
+        or ``waypoints`` with ``duration`` or ``times``, ``unit`` as for ``[initial]``.
+        """
+        joints = strings(t, "joints") or None
+        if t.has("joints") and joints is None:
+            raise t.error("joints", "a non-empty list of names (omit it for every joint)", [])
+        return {"joints": joints, "trajectory": joint_trajectory_table(t.table("trajectory"))}
+
+    @classmethod
+    def from_spec(cls, robot: Robot, spec: dict[str, Any]) -> BaseTask:
+        """The posture of the table's joints."""
+        return cls(robot, spec["joints"])
+
+    def trajectory_from(self, spec: dict[str, Any], q0: np.ndarray) -> Trajectory:
+        """The table's joint path from the joints' values at ``q0``.
+
+        Values written in degrees are converted per joint: revolute and continuous joints
+        by ``unit``, prismatic ones kept in metres.
+        """
+        kinds, angle = self.robot.joint_kinds, unit_scale(spec["unit"], "unit")
+        scale = np.array([1.0 if kinds[j] == PRISMATIC else angle for j in self.joints])
+        return joint_path(spec, self.angles(q0), scale, self.joints)
+
+    @property
+    def norms(self) -> tuple[Norm, Norm | None]:
+        """The joints' error: [rad], [m] for prismatic joints only, else ``"rad, m"``."""
+        prismatic = {self.robot.joint_kinds[j] == PRISMATIC for j in self.joints}
+        unit = "rad, m" if len(prismatic) > 1 else ("m" if True in prismatic else "rad")
+        return Norm("joints' error", unit), None
 
     def reference_arrays(self, ref: Any) -> tuple[np.ndarray, np.ndarray]:
         """Joint values (n, m) and velocities (n, m) from a joint-space trajectory's samples.
@@ -120,9 +163,10 @@ class PostureTask(BaseTask):
 
     def fill(
         self, model: pin.Model, data: pin.Data, q: np.ndarray, ref: np.ndarray,
-        J: np.ndarray, e: np.ndarray,
+        ff: np.ndarray, J: np.ndarray, e: np.ndarray, xdot: np.ndarray,
     ) -> None:  # fmt: skip
-        """``e = q_d - q`` (wrapped for continuous joints) and unit rows."""
+        """``e = q_d - q`` (wrapped for continuous joints), unit rows, the feed-forward."""
+        xdot[:] = ff
         np.subtract(ref, self.angles(q), out=e)
         c = self.continuous
         if c.any():

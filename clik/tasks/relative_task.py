@@ -25,19 +25,25 @@ import numpy as np
 import pinocchio as pin
 
 from clik.errors import InputError
-from clik.tasks.kind import BaseTask
+from clik.tasks.kind import BaseTask, Norm
 from clik.tasks.targets import FrameTarget
 from clik.tasks.task import (
     AXES,
     Task,
     TaskKind,
     frame_error,
+    frame_norms,
     pose_reference_arrays,
     split_norms,
 )
+from clik.trajectory.tables import build_trajectory
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from clik.model.robot import Robot
+    from clik.schema import Table
+    from clik.trajectory.base import Trajectory
 
 LWA = pin.LOCAL_WORLD_ALIGNED
 
@@ -81,6 +87,37 @@ class RelativeTask(BaseTask):
 
     reference_size = 12
     """A pose of A in B per sample: the position (3) [m], then the rotation, row-major (9)."""
+
+    # -- the scenario: a frame task's table with relative_to (Task.read_table) ----------
+
+    @classmethod
+    def read_table(cls, t: Table, folder: Path) -> dict[str, Any]:
+        """A frame task's table (:meth:`Task.read_table`), its ``relative_to`` required."""
+        out = Task.read_table(t, folder)
+        if out["relative_to"] is None:
+            raise t.error("relative_to", "the frame the pose is expressed in")
+        return out
+
+    @classmethod
+    def from_spec(cls, robot: Robot, spec: dict[str, Any]) -> BaseTask:
+        """The relative task of a frame task's table with ``relative_to``."""
+        return cls(robot, spec["frame"], spec["relative_to"], spec["kind"], spec["axes"])
+
+    def trajectory_from(self, spec: dict[str, Any], q0: np.ndarray) -> Trajectory:
+        """The table's trajectory from A's pose in B at ``q0`` (in B's axes)."""
+        return build_trajectory(spec, self.placement(q0), self.has_position, self.has_orientation)
+
+    @property
+    def norms(self) -> tuple[Norm, Norm | None]:
+        """Position [m] and orientation [rad] errors of A in B (the one it has)."""
+        return frame_norms(self.has_position, self.has_orientation)
+
+    def trail(
+        self, model: pin.Model, data: pin.Data, ref: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """A's origin and its reference position, placed by B's pose (world) [m]."""
+        reference = data.oMf[self.relative_id].act(ref[:3]) if self.has_position else None
+        return data.oMf[self.frame_id].translation.copy(), reference
 
     @property
     def axes(self) -> list[str]:
@@ -129,9 +166,10 @@ class RelativeTask(BaseTask):
 
     def fill(
         self, model: pin.Model, data: pin.Data, q: np.ndarray, ref: np.ndarray,
-        J: np.ndarray, e: np.ndarray,
+        ff: np.ndarray, J: np.ndarray, e: np.ndarray, xdot: np.ndarray,
     ) -> None:  # fmt: skip
-        """Error ``(p_d - p, log3(R_d R^T))`` of A's pose in B and its Jacobian rows."""
+        """Error ``(p_d - p, log3(R_d R^T))`` of A's pose in B, its Jacobian rows, feed-forward."""
+        xdot[:] = ff
         oMa = pin.updateFramePlacement(model, data, self.frame_id)
         oMb = pin.updateFramePlacement(model, data, self.relative_id)
         e6 = frame_error(

@@ -131,32 +131,48 @@ class FrameTarget:
 
 
 @dataclass(frozen=True)
-class PostureTarget:
-    """Joint values (a posture): target (m,) [rad or m], velocity (m,) [rad/s or m/s].
+class ValuesTarget:
+    """Values (a posture's joints, a distance): target (m,), velocity (m,).
+
+    One value may also be given as a number.
 
     Attributes:
-        m: The posture's joints.
+        m: The values.
+        what: What they are, in words (``"joint values"``, ``"distance"``).
+        unit: Their unit (``"rad or m"``, ``"m"``).
+        rate: What their velocities are (``"joint velocities"``, ``"rate"``).
+        rate_unit: Their unit.
     """
 
     m: int
+    what: str = "joint values"
+    unit: str = "rad or m"
+    rate: str = "joint velocities"
+    rate_unit: str = "rad/s or m/s"
+
+    def _size(self, shape: tuple[int, ...]) -> int:
+        return self.m if shape == (self.m,) or (self.m == 1 and shape == ()) else -1
 
     def target_size(self, shape: tuple[int, ...]) -> int:
         """Floats read of a target of ``shape``, or -1: a form the task does not take."""
-        return self.m if shape == (self.m,) else -1
+        return self._size(shape)
 
     def velocity_size(self, shape: tuple[int, ...] | None) -> int:
         """Floats read of a velocity of ``shape`` (None: none given, 0), or -1."""
-        if shape is None:
-            return 0
-        return self.m if shape == (self.m,) else -1
+        return 0 if shape is None else self._size(shape)
+
+    def _forms(self, what: str, unit: str) -> str:
+        if self.m == 1:
+            return f"a {what} [{unit}] (a number, or (1,))"
+        return f"{self.m} {what} ({self.m},) [{unit}]"
 
     def target_forms(self) -> str:
         """The forms of target it takes, in words."""
-        return f"{self.m} joint values ({self.m},) [rad or m]"
+        return self._forms(self.what, self.unit)
 
     def velocity_forms(self) -> str:
         """The forms of velocity it takes, in words."""
-        return f"{self.m} joint velocities ({self.m},) [rad/s or m/s]"
+        return self._forms(self.rate, self.rate_unit)
 
     def read(
         self, target: np.ndarray, velocity: np.ndarray | None
@@ -164,16 +180,18 @@ class PostureTarget:
         """The reference (m,) and feed-forward (m,) of a target and velocity.
 
         Raises:
-            Refusal: A non-finite joint value or velocity.
+            Refusal: A non-finite value or velocity.
         """
         if not np.isfinite(target).all():
             raise Refusal(False, "finite numbers")
         if velocity is not None and not np.isfinite(velocity).all():
             raise Refusal(True, "finite numbers")
-        return target.copy(), np.zeros(self.m) if velocity is None else velocity.copy()
+        ref = np.array(target, dtype=float).reshape(self.m)
+        ff = np.zeros(self.m) if velocity is None else np.array(velocity, float).reshape(self.m)
+        return ref, ff
 
 
-TickTarget = FrameTarget | PostureTarget
+TickTarget = FrameTarget | ValuesTarget
 """A task's reader of a controller's target."""
 
 

@@ -19,19 +19,26 @@ and Jacobian rows are expressed in the world frame at the frame's origin.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pinocchio as pin
 
 from clik.errors import InputError
-from clik.tasks.kind import BaseTask
+from clik.tasks.kind import BaseTask, Norm
 from clik.tasks.targets import FrameTarget
+from clik.trajectory.tables import build_trajectory, strings, trajectory_table
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
+    from clik.schema import Table
+    from clik.trajectory.base import Trajectory
 
 TaskKind = Literal["position", "orientation", "pose"]
+
+POSITION_ERROR = Norm("position error", "m")
+ORIENTATION_ERROR = Norm("orientation error", "rad")
 
 AXES: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
 """Names of the six components of a frame task, in row order."""
@@ -63,6 +70,40 @@ def frame_rows(kind: str, axes: Sequence[str] | None) -> tuple[int, ...]:
     return tuple(sorted(AXES.index(a) for a in axes))
 
 
+def frame_table(t: Table) -> dict[str, Any]:
+    """A frame task's keys (``frame``, ``kind``, ``axes``) of a ``[task]`` or ``[[tasks]]`` table.
+
+    The axes are checked against the kind.
+
+    Raises:
+        ScenarioError: A bad key (named).
+    """
+    out = {
+        "frame": t.string("frame"),
+        "kind": t.string("kind", "pose", tuple(_KIND_AXES)),
+        "axes": strings(t, "axes") or None,
+    }
+    if t.has("axes") and out["axes"] is None:
+        raise t.error("axes", "a non-empty list of axis names (omit it for every axis)", [])
+    try:
+        frame_rows(out["kind"], out["axes"])
+    except InputError as exc:
+        raise t.error("axes", exc.expected, exc.got) from None
+    return out
+
+
+def has_orientation_rows(kind: str, axes: Sequence[str] | None) -> bool:
+    """Whether a frame task of ``kind`` on ``axes`` has orientation rows."""
+    return any(row >= 3 for row in frame_rows(kind, axes))
+
+
+def frame_norms(has_position: bool, has_orientation: bool) -> tuple[Norm, Norm | None]:
+    """A frame task's norms: position [m] and orientation [rad], or the one it has."""
+    if not has_position:
+        return ORIENTATION_ERROR, None
+    return POSITION_ERROR, ORIENTATION_ERROR if has_orientation else None
+
+
 class Task(BaseTask):
     """A position, orientation or pose task on one frame, with a component mask.
 
@@ -87,6 +128,8 @@ class Task(BaseTask):
         m: Task dimension, ``len(rows)``.
     """
 
+    names = ("position", "orientation", "pose")
+    leads = True
     reference_size = 12
     """A pose per sample: the position (3) [m], then the rotation, row-major (9)."""
 
@@ -122,6 +165,47 @@ class Task(BaseTask):
         return FrameTarget(
             self.has_position, self.has_orientation, tuple(int(r) for r in self.rows)
         )
+
+    # -- the scenario: [[tasks]] kind = "position" | "orientation" | "pose" --------------
+
+    @classmethod
+    def read_table(cls, t: Table, folder: Path) -> dict[str, Any]:
+        """``frame``, ``axes``, ``relative_to`` and a ``[tasks.trajectory]`` (required).
+
+        ``relative_to`` makes it the frame's pose in that frame (a
+        :class:`~clik.tasks.relative_task.RelativeTask`); the trajectory takes the keys of
+        :func:`clik.trajectory.tables.trajectory_table`.
+        """
+        out = frame_table(t)
+        out["relative_to"] = t.string("relative_to", None)
+        has_orientation = has_orientation_rows(out["kind"], out["axes"])
+        out["trajectory"] = trajectory_table(t.table("trajectory", True), folder, has_orientation)
+        return out
+
+    @classmethod
+    def leads_spec(cls, spec: dict[str, Any]) -> bool:
+        """A frame task in the world (no ``relative_to``)."""
+        return spec.get("relative_to") is None
+
+    @classmethod
+    def from_spec(cls, robot: Robot, spec: dict[str, Any]) -> BaseTask:
+        """A :class:`Task`, or a relative task when the table names ``relative_to``."""
+        if spec.get("relative_to") is not None:
+            from clik.tasks.relative_task import RelativeTask
+
+            return RelativeTask(
+                robot, spec["frame"], spec["relative_to"], spec["kind"], spec["axes"]
+            )
+        return cls(robot, spec["frame"], spec["kind"], spec["axes"])
+
+    def trajectory_from(self, spec: dict[str, Any], q0: np.ndarray) -> Trajectory:
+        """The table's trajectory from the frame's pose at ``q0``."""
+        return build_trajectory(spec, self.placement(q0), self.has_position, self.has_orientation)
+
+    @property
+    def norms(self) -> tuple[Norm, Norm | None]:
+        """Position [m] and orientation [rad] errors (the one it has)."""
+        return frame_norms(self.has_position, self.has_orientation)
 
     def __repr__(self) -> str:
         return f"Task(frame={self.frame!r}, kind={self.kind!r}, axes={self.axes})"
@@ -173,9 +257,10 @@ class Task(BaseTask):
 
     def fill(
         self, model: pin.Model, data: pin.Data, q: np.ndarray, ref: np.ndarray,
-        J: np.ndarray, e: np.ndarray,
+        ff: np.ndarray, J: np.ndarray, e: np.ndarray, xdot: np.ndarray,
     ) -> None:  # fmt: skip
-        """Error (6) ``(p_d - p, log3(R_d R^T))`` and Jacobian (3) rows at ``q``."""
+        """Error (6) ``(p_d - p, log3(R_d R^T))``, Jacobian (3) rows and feed-forward at ``q``."""
+        xdot[:] = ff
         fid = self.frame_id
         placement = pin.updateFramePlacement(model, data, fid)
         e6 = frame_error(
@@ -194,6 +279,13 @@ class Task(BaseTask):
     def engine_goal(self, engine: Any) -> Any:
         """``_engine.FrameGoal`` in the world."""
         return engine.FrameGoal(frame=int(self.frame_id), rows=[int(r) for r in self.rows])
+
+    def trail(
+        self, model: pin.Model, data: pin.Data, ref: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """The frame's origin and its reference position (none for an orientation task)."""
+        reference = ref[:3].copy() if self.has_position else None
+        return data.oMf[self.frame_id].translation.copy(), reference
 
 
 def frame_error(

@@ -5,16 +5,12 @@ A run with ``tasks=[clik.Goal(...), ...]`` records the primary task's path
 (``result.extra["task_errors"]``), but neither the other tasks nor their paths: the
 result does not keep the goals. :func:`task_paths` computes them afterwards from the
 recorded configurations ``result.q`` and the goals the run was given, on the recorded
-times ``result.t``:
-
-- a frame task (:class:`~clik.tasks.task.Task`): the frame's origin ``p(q)`` and its
-  trajectory's positions ``p_d(t)`` [m];
-- a relative task (:class:`~clik.tasks.relative_task.RelativeTask`, frame A in frame B):
-  A's origin, and the reference ``p_d(t)`` (in B's axes) mapped to the world through B's
-  placement at the recorded configuration, ``oMb(q) p_d(t)`` [m]: where A should be,
-  seen from where B is;
-- a centre-of-mass task (:class:`~clik.tasks.com_task.ComTask`): ``c(q)`` and ``c_d(t)`` [m];
-- a posture task has no path in space (it has none here).
+times ``result.t``, each as its kind draws it
+(:meth:`~clik.tasks.kind.BaseTask.trail`: the achieved point and the reference point at
+a sample). For example a frame task's origin ``p(q)`` and its reference ``p_d(t)``; a
+relative task's A origin and its reference mapped to the world through B's placement
+``oMb(q) p_d(t)``; the centre of mass; where a gaze axis points and its point. A kind
+with no point in space (a posture, a distance) has no path here.
 """
 
 from __future__ import annotations
@@ -27,11 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from clik.errors import InputError
-from clik.tasks.com_task import ComTask
 from clik.tasks.goal import Goal
-from clik.tasks.posture_task import PostureTask
-from clik.tasks.relative_task import RelativeTask
-from clik.tasks.task import Task
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
@@ -44,10 +36,11 @@ class TaskPath:
 
     Attributes:
         name: The task's name (its key in ``result.task_errors``).
-        kind: The task's kind (``"pose"``, ``"position"``, ``"orientation"``, ``"com"``).
+        kind: The task's kind (``"pose"``, ``"com"``, ``"gaze"``, ...).
         primary: Whether it is the run's primary task (drawn as ``result.position``).
         achieved: The tracked point at each recorded sample (N, 3) [m].
-        reference: Where it was asked to be (N, 3) [m]; None for an orientation task.
+        reference: Where it was asked to be (N, 3) [m]; None where its kind has no point
+            (an orientation task).
     """
 
     name: str
@@ -89,7 +82,7 @@ def checked_goals(result: TrackingResult, goals: Sequence[Goal]) -> list[str]:
 def task_paths(
     result: TrackingResult, goals: Sequence[Goal], robot: Robot | None = None
 ) -> list[TaskPath]:
-    """Each frame, relative and centre-of-mass task's path over the run (module docstring).
+    """Each task's path over the run, as its kind draws it (module docstring).
 
     Args:
         result: A run with ``tasks=goals``.
@@ -98,7 +91,7 @@ def task_paths(
 
     Returns:
         One path per goal with a point in space, in the run's row order (the primary
-        first); posture tasks are left out.
+        first); kinds with no point (a posture) are left out.
 
     Raises:
         InputError: Not the run's goals, a task on another robot than the result's, or
@@ -113,55 +106,26 @@ def task_paths(
     if any(g.task.robot.nq != robot.nq for g in goals):
         raise InputError("tasks", f"tasks on {robot.name} (nq = {robot.nq})")
     t, q = np.asarray(result.t, dtype=float), np.asarray(result.q, dtype=float)
-    frames = _frame_placements(robot, q, [by_name[n].task for n in order])
-    paths = []
-    for i, name in enumerate(order):
-        goal = by_name[name]
-        if isinstance(goal.task, PostureTask):
-            continue
-        achieved, reference = _points(goal, t, q, frames, robot)
-        paths.append(TaskPath(name, goal.task.kind, i == 0, achieved, reference))
-    return paths
-
-
-def _frame_placements(
-    robot: Robot, q: np.ndarray, tasks: Sequence[object]
-) -> dict[int, list[pin.SE3]]:
-    """The world placements of the frames the tasks read, at every recorded sample."""
-    ids: set[int] = set()
-    for task in tasks:
-        if isinstance(task, Task | RelativeTask):
-            ids.add(int(task.frame_id))
-        if isinstance(task, RelativeTask):
-            ids.add(int(task.relative_id))
     model = robot.model
     data = model.createData()
-    out: dict[int, list[pin.SE3]] = {i: [] for i in ids}
-    for qk in q if ids else ():
+    refs = [by_name[n].task.reference_arrays(by_name[n].trajectory.sample(t))[0] for n in order]
+    points: list[list[tuple[np.ndarray, np.ndarray | None] | None]] = [[] for _ in order]
+    for k, qk in enumerate(q):
         pin.forwardKinematics(model, data, qk)
-        for i in ids:
-            out[i].append(pin.updateFramePlacement(model, data, i).copy())
-    return out
-
-
-def _points(
-    goal: Goal, t: np.ndarray, q: np.ndarray, frames: dict[int, list[pin.SE3]], robot: Robot
-) -> tuple[np.ndarray, np.ndarray | None]:
-    """``(achieved (N, 3), reference (N, 3) or None)`` of one goal [m]."""
-    task = goal.task
-    ref = goal.trajectory.sample(t)
-    p_d = getattr(ref, "position", None)
-    reference = None if p_d is None else np.array(p_d, dtype=float).reshape(len(t), 3)
-    if isinstance(task, ComTask):
-        data = robot.model.createData()
-        achieved = np.array([pin.centerOfMass(robot.model, data, qk) for qk in q])
-        return achieved.reshape(len(t), 3), reference
-    if not isinstance(task, Task | RelativeTask):
-        raise InputError("tasks.task", "a frame, relative or com task", type(task).__name__)
-    achieved = np.array([m.translation for m in frames[int(task.frame_id)]]).reshape(len(t), 3)
-    if not task.has_position:
-        reference = None
-    if isinstance(task, RelativeTask) and reference is not None:
-        oMb = frames[int(task.relative_id)]
-        reference = np.array([m.act(p) for m, p in zip(oMb, reference, strict=True)])
-    return achieved, reference
+        pin.updateFramePlacements(model, data)
+        pin.centerOfMass(model, data, qk, False)
+        for i, name in enumerate(order):
+            points[i].append(by_name[name].task.trail(model, data, refs[i][k]))
+    paths = []
+    for i, name in enumerate(order):
+        if not points[i] or points[i][0] is None:
+            continue  # no point in space (a posture)
+        trail = [p for p in points[i] if p is not None]
+        achieved = np.array([a for a, _ in trail], dtype=float).reshape(len(t), 3)
+        reference = (
+            None
+            if trail[0][1] is None
+            else np.array([r for _, r in trail], dtype=float).reshape(len(t), 3)
+        )
+        paths.append(TaskPath(name, by_name[name].task.kind, i == 0, achieved, reference))
+    return paths

@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -129,7 +130,7 @@ nb::tuple advance(PyTrackingRun& self, long c0, long c1, std::optional<In<double
         "position rows), R_d (c1 - c0, 3, 3) (None only without orientation rows), q (nq,)");
   }
   const auto D = static_cast<std::size_t>(goals.ref_size());
-  const auto M = static_cast<std::size_t>(goals.rows());
+  const auto M = static_cast<std::size_t>(goals.ff_size());
   const bool goals_ok = goals.count() == 0
                             ? !goal_ref && !goal_ff
                             : goal_ref && goal_ff && shaped(*goal_ref, {D}) && shaped(*goal_ff, {M});
@@ -153,35 +154,7 @@ nb::tuple advance(PyTrackingRun& self, long c0, long c1, std::optional<In<double
 
 // The extra goals (tasks/goals.hpp) and the objectives (loop/objectives.hpp).
 void bind_goals(nb::module_& m) {
-  nb::class_<FrameGoal>(m, "FrameGoal",
-                        "A frame's pose goal: rows among 0..5, relative_to -1 (the world) or "
-                        "a frame.")
-      .def(
-          "__init__",
-          [](FrameGoal* self, int frame, std::vector<int> rows, int relative_to) {
-            new (self) FrameGoal{frame, std::move(rows), relative_to};
-          },
-          nb::arg("frame"), nb::arg("rows"), nb::arg("relative_to") = -1)
-      .def_ro("frame", &FrameGoal::frame)
-      .def_ro("rows", &FrameGoal::rows)
-      .def_ro("relative_to", &FrameGoal::relative_to);
-  nb::class_<PostureGoal>(m, "PostureGoal",
-                          "Joint angles of 1-DoF joints: idx_q, idx_v, continuous per joint.")
-      .def(
-          "__init__",
-          [](PostureGoal* self, std::vector<int> idx_q, std::vector<int> idx_v,
-             std::vector<bool> continuous) {
-            new (self) PostureGoal{std::move(idx_q), std::move(idx_v), std::move(continuous)};
-          },
-          nb::arg("idx_q"), nb::arg("idx_v"), nb::arg("continuous"))
-      .def_ro("idx_q", &PostureGoal::idx_q)
-      .def_ro("idx_v", &PostureGoal::idx_v);
-  nb::class_<ComGoal>(m, "ComGoal", "The centre of mass, rows among 0..2.")
-      .def(
-          "__init__",
-          [](ComGoal* self, std::vector<int> rows) { new (self) ComGoal{std::move(rows)}; },
-          nb::arg("rows"))
-      .def_ro("rows", &ComGoal::rows);
+  for_each_goal_config([&](auto* kind) { std::remove_pointer_t<decltype(kind)>::bind(m); });
   nb::class_<ObjectiveConfig>(m, "ObjectiveConfig",
                               "A null-space objective of eq. (5): kind, gain [1/s], level.")
       .def(

@@ -14,12 +14,10 @@ TickTargets::TickTargets(const TrackingRun& run)
   const TaskConfig& task = run.task();
   readers_.emplace_back(FrameTarget{task.has_position, task.has_orientation, task.rows, true});
   const Goals& goals = run.goals();
-  int ref = 0;
   for (int g = 0; g < goals.count(); ++g) {
     readers_.push_back(goals.target(g));
-    ref_at_.push_back(ref);
-    ff_at_.push_back(goals.row_end(g) - goals.rows_of(g));
-    ref += goals.ref_size_of(g);
+    ref_at_.push_back(goals.ref_at(g));
+    ff_at_.push_back(goals.ff_at(g));
   }
   for (const TargetReader& r : readers_) {
     Floats t, v;
@@ -32,7 +30,7 @@ TickTargets::TickTargets(const TrackingRun& run)
   }
   ff_.assign(task.rows.size(), 0.0);
   goal_ref_.assign(static_cast<std::size_t>(goals.ref_size()), 0.0);
-  goal_ff_.assign(static_cast<std::size_t>(goals.rows()), 0.0);
+  goal_ff_.assign(static_cast<std::size_t>(goals.ff_size()), 0.0);
   goal_ref_prev_ = goal_ref_;
 }
 
@@ -51,7 +49,7 @@ bool TickTargets::read(int& i, Refusal& why) {
       double* ff = goal_ff_.data() + ff_at_[at - 1];
       ok = std::visit(
           [&](const auto& r) {
-            if constexpr (std::is_same_v<std::decay_t<decltype(r)>, PostureTarget>) {
+            if constexpr (std::is_same_v<std::decay_t<decltype(r)>, ValuesTarget>) {
               return r.read(target, velocity, ref, ff, why);
             } else {  // a frame's pose (p, R) or a centre of mass (p)
               return r.read(target, velocity, ref, ref + 3, ff, why);

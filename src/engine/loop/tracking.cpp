@@ -220,7 +220,7 @@ Advance TrackingRun::advance(long c0, long c1, const double* P_d, const double* 
     task_rows(p_d, R_d == nullptr ? nullptr : R_d + 9 * kk, FF + m0_ * kk);
     if (goals_.count() > 0) {
       goals_.write(GoalContext{model_, data_, qv_}, goal_ref + goals_.ref_size() * kk,
-                   goal_ff + goals_.rows() * kk, ext_, m0_);
+                   goal_ff + goals_.ff_size() * kk, ext_, m0_);
     }
     if (!objectives_.empty()) {
       objectives_.compute(model_, data_, qv_, ext_.J.topRows(m0_), law_.objective_z());

@@ -108,18 +108,15 @@ bool FrameTarget::read(const Floats& target, const Floats& velocity, double* p, 
   return true;
 }
 
-// -- joint values -----------------------------------------------------------------------
+// -- values ----------------------------------------------------------------------------
 
-std::string PostureTarget::target_forms() const {
-  return std::to_string(m) + " joint values (" + std::to_string(m) + ",) [rad or m]";
+std::string ValuesTarget::forms(const std::string& words, const std::string& in) const {
+  if (m == 1) return "a " + words + " [" + in + "] (a number, or (1,))";
+  return std::to_string(m) + " " + words + " (" + std::to_string(m) + ",) [" + in + "]";
 }
 
-std::string PostureTarget::velocity_forms() const {
-  return std::to_string(m) + " joint velocities (" + std::to_string(m) + ",) [rad/s or m/s]";
-}
-
-bool PostureTarget::read(const Floats& target, const Floats& velocity, double* ref, double* ff,
-                         Refusal& why) const {
+bool ValuesTarget::read(const Floats& target, const Floats& velocity, double* ref, double* ff,
+                        Refusal& why) const {
   const double* t = target.values.data();
   if (!all_finite(t, m)) return refuse(why, false, "finite numbers", Refusal::Show::values);
   const bool given = velocity_size(velocity) == m;
@@ -141,7 +138,7 @@ bool PostureTarget::read(const Floats& target, const Floats& velocity, double* r
 long largest_target(const TargetReader& reader) {
   return std::visit(
       [](const auto& r) -> long {
-        if constexpr (std::is_same_v<std::decay_t<decltype(r)>, PostureTarget>) return r.m;
+        if constexpr (std::is_same_v<std::decay_t<decltype(r)>, ValuesTarget>) return r.m;
         return 16;
       },
       reader);
@@ -150,7 +147,7 @@ long largest_target(const TargetReader& reader) {
 long largest_velocity(const TargetReader& reader) {
   return std::visit(
       [](const auto& r) -> long {
-        if constexpr (std::is_same_v<std::decay_t<decltype(r)>, PostureTarget>) return r.m;
+        if constexpr (std::is_same_v<std::decay_t<decltype(r)>, ValuesTarget>) return r.m;
         return 6;
       },
       reader);

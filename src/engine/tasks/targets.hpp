@@ -57,19 +57,26 @@ struct FrameTarget {
             Refusal& why) const;
 };
 
-// Joint values (a posture): target (m,) [rad or m], velocity (m,); ref and ff m each.
-struct PostureTarget {
+// Values (a posture's joints, a distance): target (m,), velocity (m,); one value may also
+// be given as a number (shape ()). Writes ref and ff, m each.
+struct ValuesTarget {
   long m = 0;
+  std::string what = "joint values", unit = "rad or m";         // the target's words
+  std::string rate = "joint velocities", rate_unit = "rad/s or m/s";  // the velocity's
 
-  long target_size(const Floats& f) const { return f.is(m) ? m : -1; }
-  long velocity_size(const Floats& f) const { return !f.given ? 0 : f.is(m) ? m : -1; }
-  std::string target_forms() const;
-  std::string velocity_forms() const;
+  long target_size(const Floats& f) const { return size(f); }
+  long velocity_size(const Floats& f) const { return !f.given ? 0 : size(f); }
+  std::string target_forms() const { return forms(what, unit); }
+  std::string velocity_forms() const { return forms(rate, rate_unit); }
   bool read(const Floats& target, const Floats& velocity, double* ref, double* ff,
             Refusal& why) const;
+
+ private:
+  long size(const Floats& f) const { return f.is(m) || (m == 1 && f.shape.empty()) ? m : -1; }
+  std::string forms(const std::string& words, const std::string& in) const;
 };
 
-using TargetReader = std::variant<FrameTarget, PostureTarget>;
+using TargetReader = std::variant<FrameTarget, ValuesTarget>;
 
 // Largest doubles a reader reads of a target and of a velocity.
 long largest_target(const TargetReader& reader);

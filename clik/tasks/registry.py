@@ -1,0 +1,47 @@
+"""The kinds of task, listed once: each one class, the loop and the scenarios ask them.
+
+A new kind of task is its module in ``clik/tasks/`` (one :class:`~clik.tasks.kind.BaseTask`
+class: its scenario table, rows, reference, target forms, norms and drawing), its C++
+type in ``src/engine/tasks/`` (listed in ``task_kinds.hpp``), its line here, its
+derivation in docs/method.md and its keys in docs/guides/scenarios.md;
+``tests/tasks/test_task_kinds.py`` then runs every generic check on it.
+"""
+
+from __future__ import annotations
+
+from clik.errors import InputError
+from clik.tasks.com_task import ComTask
+from clik.tasks.distance_task import DistanceTask
+from clik.tasks.gaze_task import GazeTask
+from clik.tasks.kind import BaseTask
+from clik.tasks.posture_task import PostureTask
+from clik.tasks.relative_task import RelativeTask
+from clik.tasks.task import Task
+
+TASK_KINDS: tuple[type[BaseTask], ...] = (
+    Task,
+    RelativeTask,
+    PostureTask,
+    ComTask,
+    DistanceTask,
+    GazeTask,
+)
+"""Every kind of task (a :class:`~clik.tasks.relative_task.RelativeTask` is read from a
+frame task's table with ``relative_to``: it names no ``[[tasks]] kind`` of its own)."""
+
+
+def kind_names() -> tuple[str, ...]:
+    """Every ``[[tasks]] kind`` name, in the registry's order."""
+    return tuple(name for cls in TASK_KINDS for name in cls.names)
+
+
+def kind_class(name: str) -> type[BaseTask]:
+    """The kind whose ``[[tasks]]`` table ``kind = name`` is.
+
+    Raises:
+        InputError: No kind of that name (``kind``).
+    """
+    for cls in TASK_KINDS:
+        if name in cls.names:
+            return cls
+    raise InputError("kind", "one of " + ", ".join(repr(n) for n in kind_names()), name)

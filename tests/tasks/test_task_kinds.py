@@ -1,0 +1,346 @@
+"""Every kind of task, through one generic test (clik/tasks/registry.py).
+
+For each registered kind a case (a robot, the kind as a goal beside a frame task that
+leads, a trajectory, a start) drives:
+
+- its rows against central differences of its error (``edot = xdot_d - J qdot``, so
+  ``J = -de/dq``), to 1e-6 of the rows' size, and its feed-forward against the
+  reference's motion;
+- both engines on a short run: the same status, events and joint trajectory (1e-9 rad);
+- a scenario round trip: its ``[[tasks]]`` table written, read, built and run;
+- bad input: each of its table's keys refused by name;
+- a controller's target in each form its reader takes, in both engines (the same joints
+  as the trajectory's samples), and forms it refuses, named;
+- its protocol: every part of :class:`~clik.tasks.kind.BaseTask` implemented, its C++
+  type bound, its words in the docs.
+
+A kind without a case here fails :func:`test_every_kind_has_a_case`: registering a kind is
+how it gets tested.
+"""
+
+from __future__ import annotations
+
+import inspect
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import clik
+from clik.engine import load
+from clik.errors import InputError, ScenarioError
+from clik.scenarios.runner import build
+from clik.tasks.com_task import ComTask
+from clik.tasks.distance_task import DistanceTask
+from clik.tasks.gaze_task import GazeTask
+from clik.tasks.kind import BaseTask
+from clik.tasks.posture_task import PostureTask
+from clik.tasks.registry import TASK_KINDS, kind_class
+from clik.tasks.relative_task import RelativeTask
+from clik.trajectory import Hold, JointPath, Line, PoseTrajectory
+
+ROOT = Path(__file__).parents[2]
+ENGINES = ("python", "compiled")
+STEP = 1e-6
+"""Central-difference step [rad]."""
+ROW_TOLERANCE = 1e-6
+"""Largest ``|J - J_fd| / |J|``."""
+PARITY = 1e-9
+"""Largest joint difference between the engines [rad]."""
+FINGERS = {"panda_finger_joint1": 0.02, "panda_finger_joint2": 0.02}
+Q0 = np.array([0.0, -0.4, 0.0, -2.0, 0.0, 1.8, 0.8])
+"""A Panda start away from its singularities."""
+
+
+@dataclass
+class Case:
+    """A kind as a goal beside a frame task, its trajectory, and its scenario table."""
+
+    task: BaseTask
+    trajectory: Any
+    table: str
+    """Its ``[[tasks]]`` table (TOML), named ``"kind"``."""
+    bad_keys: dict[str, Any]
+    """Keys of its table and a value each refused (the key named in the error)."""
+    forms: Callable[[np.ndarray], list[Any]]
+    """Its tick targets in every form its reader takes, from one reference row."""
+    velocity: Callable[[Any, int], Any]
+    """Its tick velocity at sample ``k`` of its trajectory's samples."""
+
+
+def panda() -> clik.Robot:
+    return clik.Robot.load("panda", lock=FINGERS)
+
+
+def hand(robot: clik.Robot) -> clik.Task:
+    return clik.Task(robot, "panda_hand", "position")
+
+
+def linear(s: Any, k: int) -> np.ndarray:
+    return np.asarray(s.linear_velocity[k], dtype=float)
+
+
+def twist(s: Any, k: int) -> np.ndarray:
+    return np.concatenate([s.linear_velocity[k], s.angular_velocity[k]])
+
+
+def pose_forms(row: np.ndarray) -> list[Any]:
+    R = row[3:].reshape(3, 3)
+    return [
+        pin.SE3(R, row[:3]),
+        pin.SE3(R, row[:3]).homogeneous,
+        pin.SE3(R, row[:3]).homogeneous.tolist(),
+    ]
+
+
+def point_forms(row: np.ndarray) -> list[Any]:
+    return [row[:3].copy(), row[:3].tolist(), pin.SE3(np.eye(3), row[:3])]
+
+
+def case_of(kind: type[BaseTask]) -> Case:
+    """The case of each kind (a kind without one fails the test below)."""
+    robot = panda()
+    if kind is clik.Task:
+        task: BaseTask = clik.Task(robot, "panda_link5", "pose")
+        start = task.placement(Q0)  # type: ignore[attr-defined]
+        line = Line(start.translation, start.translation + [0.0, 0.02, 0.01], 0.3)
+        traj: Any = PoseTrajectory(line, Hold(rotation=start.rotation))
+        table = (
+            'kind = "pose"\nframe = "panda_link5"\n[tasks.trajectory]\nkind = "hold"\n'
+            "duration = 0.3"
+        )
+        return Case(task, traj, table, {"frame": 3, "axes": ["q"]}, pose_forms, twist)
+    if kind is RelativeTask:
+        task = RelativeTask(robot, "panda_hand", "panda_link3", "position")
+        start = task.placement(Q0)  # type: ignore[attr-defined]
+        traj = Line(start.translation, start.translation + [0.0, 0.01, 0.0], 0.3)
+        table = (
+            'kind = "position"\nframe = "panda_hand"\nrelative_to = "panda_link3"\n'
+            '[tasks.trajectory]\nkind = "hold"\nduration = 0.3'
+        )
+        return Case(task, traj, table, {"relative_to": 1}, point_forms, linear)
+    if kind is PostureTask:
+        task = PostureTask(robot, ["panda_joint1", "panda_joint7"])
+        start_q = task.angles(Q0)  # type: ignore[attr-defined]
+        traj = JointPath([start_q, start_q + 0.05], duration=0.3)
+        table = 'kind = "posture"\njoints = ["panda_joint1", "panda_joint7"]'
+        return Case(
+            task, traj, table, {"joints": "panda_joint1"}, lambda r: [r.copy(), r.tolist()],
+            lambda s, k: s.qdot[k],
+        )  # fmt: skip
+    if kind is ComTask:
+        task = ComTask(robot, ["x", "y"])
+        c0 = task.position(Q0)  # type: ignore[attr-defined]
+        traj = Line(c0, c0 + [0.01, 0.0, 0.0], 0.3)
+        table = 'kind = "com"\naxes = ["x", "y"]'
+        return Case(task, traj, table, {"axes": ["w"]}, point_forms, linear)
+    if kind is DistanceTask:
+        task = DistanceTask(robot, "panda_hand", "panda_link3")
+        d0 = task.distance(Q0)  # type: ignore[attr-defined]
+        traj = JointPath([[d0], [d0 - 0.02]], duration=0.3)
+        table = (
+            'kind = "distance"\nframe = "panda_hand"\nrelative_to = "panda_link3"\n'
+            '[tasks.trajectory]\nkind = "line"\ngoal = 0.4\nduration = 0.3'
+        )
+        return Case(
+            task, traj, table, {"relative_to": 2, "frame": []},
+            lambda r: [float(r[0]), r.copy(), np.float64(r[0]), [float(r[0])]],
+            lambda s, k: float(s.qdot[k, 0]),
+        )  # fmt: skip
+    if kind is GazeTask:
+        task = GazeTask(robot, "panda_link7", [0.0, 1.0, 0.0])
+        p0 = task.ahead(Q0, 0.5)  # type: ignore[attr-defined]
+        traj = Line(p0, p0 + [0.05, 0.0, 0.0], 0.3)
+        table = (
+            'kind = "gaze"\nframe = "panda_link7"\naxis = [0.0, 1.0, 0.0]\n'
+            '[tasks.trajectory]\nkind = "line"\ngoal = [0.5, 0.2, 0.5]\nduration = 0.3'
+        )
+        return Case(task, traj, table, {"axis": [0, 0, 0], "frame": 1.0}, point_forms, linear)
+    raise AssertionError(f"no case for {kind.__name__}: add one")
+
+
+KIND_IDS = [k.__name__ for k in TASK_KINDS]
+
+
+def rows_at(task: BaseTask, q: np.ndarray, ref: np.ndarray, ff: np.ndarray) -> tuple[Any, ...]:
+    model = task.robot.model
+    data = model.createData()
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    J, e, x = np.zeros((task.m, model.nv)), np.zeros(task.m), np.zeros(task.m)
+    task.fill(model, data, q, ref, ff, J, e, x)
+    return J, e, x
+
+
+@pytest.mark.parametrize("kind", TASK_KINDS, ids=KIND_IDS)
+def test_rows_are_the_error_s_derivative(kind: type[BaseTask]) -> None:
+    case = case_of(kind)
+    task, model = case.task, case.task.robot.model
+    ref_rows, ff_rows = task.reference_arrays(case.trajectory.sample(np.array([0.1, 0.1 + STEP])))
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        q = pin.integrate(model, Q0, 0.3 * rng.standard_normal(model.nv))
+        J = rows_at(task, q, ref_rows[0], ff_rows[0])[0]
+        Jfd = np.empty_like(J)
+        for i in range(model.nv):
+            dq = np.zeros(model.nv)
+            dq[i] = STEP
+            ep = rows_at(task, pin.integrate(model, q, dq), ref_rows[0], ff_rows[0])[1]
+            em = rows_at(task, pin.integrate(model, q, -dq), ref_rows[0], ff_rows[0])[1]
+            Jfd[:, i] = -(ep - em) / (2 * STEP)
+        assert np.abs(J - Jfd).max() <= ROW_TOLERANCE * max(np.abs(J).max(), 1e-3)
+    # the feed-forward: the error's change with the reference alone, at a fixed q
+    dt = STEP
+    _, e0, x = rows_at(task, Q0, ref_rows[0], ff_rows[0])
+    _, e1, _ = rows_at(task, Q0, ref_rows[1], ff_rows[1])
+    assert np.allclose(x, (e1 - e0) / dt, rtol=1e-4, atol=1e-6)
+
+
+def goals(case: Case) -> list[clik.Goal]:
+    robot = case.task.robot
+    lead = hand(robot)
+    held = Hold(position=lead.placement(Q0).translation, duration=0.3)
+    return [clik.Goal(lead, held, name="hand"), clik.Goal(case.task, case.trajectory, name="kind")]
+
+
+@pytest.mark.parametrize("kind", TASK_KINDS, ids=KIND_IDS)
+def test_both_engines_run_it_alike(kind: type[BaseTask]) -> None:
+    case = case_of(kind)
+    runs = {
+        e: clik.track(tasks=goals(case), q0=Q0, law="pseudoinverse", gain=100.0, engine=e)
+        for e in ENGINES
+    }
+    a, b = runs["python"], runs["compiled"]
+    assert a.status == b.status == "completed", (a.reason, b.reason)
+    assert a.events == b.events
+    assert np.abs(a.q - b.q).max() <= PARITY
+    entry = a.task_errors["kind"]
+    first, second = case.task.norms
+    assert (entry["error"], entry["unit"]) == (first.what, first.unit)
+    assert entry["max"] == pytest.approx(b.task_errors["kind"]["max"], abs=1e-9)
+    assert ("max_orientation" in entry) == (second is not None)
+
+
+def scenario_text(case: Case) -> str:
+    return f"""
+name = "a {case.task.kind} task"
+robot = {{ source = "panda", lock = {{ panda_finger_joint1 = 0.02, panda_finger_joint2 = 0.02 }} }}
+initial = {{ q = {Q0.tolist()} }}
+
+[[tasks]]
+name = "hand"
+kind = "position"
+frame = "panda_hand"
+[tasks.trajectory]
+kind = "hold"
+duration = 0.3
+
+[[tasks]]
+name = "kind"
+{case.table}
+
+[solver]
+law = "pseudoinverse"
+gain = 100.0
+"""
+
+
+@pytest.mark.parametrize("kind", TASK_KINDS, ids=KIND_IDS)
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_scenario_of_it_runs(kind: type[BaseTask], engine: str, tmp_path: Path) -> None:
+    case = case_of(kind)
+    path = tmp_path / "kind.toml"
+    path.write_text(scenario_text(case))
+    run = build(path)
+    built = next(g for g in run.goals if g.name == "kind")
+    assert type(built.task) is type(case.task)
+    run.tracker.engine = engine
+    result = run.execute()
+    assert result.status == "completed", result.reason
+    assert result.task_errors["kind"]["max"] <= 1e-3
+
+
+@pytest.mark.parametrize("kind", TASK_KINDS, ids=KIND_IDS)
+def test_each_key_of_its_table_is_refused_by_name(kind: type[BaseTask], tmp_path: Path) -> None:
+    case = case_of(kind)
+    for key, bad in case.bad_keys.items():
+        lines = [ln for ln in case.table.splitlines() if not ln.startswith(f"{key} =")]
+        head = lines.index("[tasks.trajectory]") if "[tasks.trajectory]" in lines else len(lines)
+        value = repr(bad).replace("'", '"').replace("True", "true")
+        lines.insert(head, f"{key} = {value}")
+        text = scenario_text(Case(case.task, None, "\n".join(lines), {}, case.forms, linear))
+        path = tmp_path / f"bad_{key}.toml"
+        path.write_text(text)
+        with pytest.raises(ScenarioError, match=rf"tasks\[1\]\.{key}"):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                build(path)
+
+
+@pytest.mark.parametrize("kind", TASK_KINDS, ids=KIND_IDS)
+def test_a_controller_takes_each_form_of_its_target(kind: type[BaseTask]) -> None:
+    """Each form gives, tick for tick, ``clik.track``'s joints on the same samples."""
+    case = case_of(kind)
+    t = np.arange(200) * 1e-3
+    sample = case.trajectory.sample(t)
+    refs, _ = case.task.reference_arrays(sample)
+    lead = hand(case.task.robot)
+    home = lead.placement(Q0).translation
+    offline = clik.track(
+        tasks=[clik.Goal(lead, Hold(position=home, duration=0.3), name="hand"),
+               clik.Goal(case.task, case.trajectory, name="kind")],
+        q0=Q0, law="pseudoinverse", gain=100.0,
+    )  # fmt: skip
+    for engine in ENGINES:
+        for form in range(len(case.forms(refs[0]))):
+            ctl = clik.Controller(
+                tasks=[clik.Goal(lead, name="hand"), clik.Goal(case.task, name="kind")],
+                law="pseudoinverse", gain=100.0, q0=Q0, engine=engine,
+            )  # fmt: skip
+            for k in range(t.shape[0]):
+                targets = {"hand": home, "kind": case.forms(refs[k])[form]}
+                tick = ctl.step(targets, {"hand": np.zeros(3), "kind": case.velocity(sample, k)})
+                assert tick.verdict == "ok", tick.reason
+            q = ctl.result().q
+            assert np.abs(q - offline.q[: q.shape[0]]).max() <= PARITY, (engine, form)
+        bad = clik.Controller(
+            tasks=[clik.Goal(lead, name="hand"), clik.Goal(case.task, name="kind")], q0=Q0,
+            engine=engine,
+        )  # fmt: skip
+        for wrong in (np.zeros((2, 7)), "text", None, np.full(refs[0].shape, np.nan)):
+            with pytest.raises(InputError, match=r"targets\['kind'\]"):
+                bad.step({"hand": home, "kind": wrong})
+        assert bad.k == 0
+
+
+def test_every_kind_has_a_case() -> None:
+    for kind in TASK_KINDS:
+        case_of(kind)  # raises for a kind without one
+
+
+@pytest.mark.parametrize("kind", TASK_KINDS, ids=KIND_IDS)
+def test_every_kind_has_every_part_of_the_protocol(kind: type[BaseTask]) -> None:
+    abstract = {
+        name
+        for name, value in inspect.getmembers(BaseTask)
+        if getattr(value, "__isabstractmethod__", False)
+    }
+    assert not getattr(kind, "__abstractmethods__", set()), kind.__abstractmethods__
+    assert abstract <= {n for n in dir(kind)}
+    case = case_of(kind)
+    task = case.task
+    goal = task.engine_goal(load())
+    assert type(goal).__module__ == "clik._engine"
+    assert task.tick_target().target_forms()
+    assert task.describe() and task.axes and len(task.axes) == task.m
+    for name in kind.names:
+        assert kind_class(name) is kind
+    docs = (ROOT / "docs" / "guides" / "scenarios.md").read_text()
+    for name in kind.names or ("relative_to",):
+        assert f'kind = "{name}"' in docs or name in docs, name
+    assert type(task).__name__ in (ROOT / "docs" / "method.md").read_text()
