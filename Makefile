@@ -1,7 +1,8 @@
 # clik: the two commands of the README, and a few more.
 #   make demo   creates .venv, installs clik, runs the case study (out/demo)
 #   make test   creates .venv with the test extras, runs every test and notebook
-#   make lint   ruff (style, docstrings) and mypy (types) on clik/
+#   make lint   ruff (style, docstrings) and mypy (types) on clik/ and benchmarks/
+#   make bench  installs the bench extra (pink, mink, MuJoCo), runs benchmarks/ into out/bench
 #   make docs   the documentation site (MkDocs, mkdocs.yml), built strictly into site/
 #   make sanitize  the engine built with AddressSanitizer and UBSan (.venv-sanitize,
 #               build/sanitize), the engine's tests run under it; fails on any report
@@ -64,8 +65,8 @@ test: $(VENV)/.installed-test
 	$(PY) -m pytest tests $(if $(NOTEBOOKS),--nbmake --nbmake-timeout=120 $(NOTEBOOKS)) --timeout=600 -q
 
 lint: $(VENV)/.installed-test
-	$(VENV)/bin/ruff check clik tests
-	$(VENV)/bin/ruff format --check clik tests
+	$(VENV)/bin/ruff check clik benchmarks tests
+	$(VENV)/bin/ruff format --check clik benchmarks tests
 	$(VENV)/bin/mypy
 
 # The site (docs/, mkdocs.yml) into site/; --strict: a broken link, a page missing from the

@@ -17,7 +17,8 @@ import os
 import sys
 from collections.abc import Sequence
 
-from clik.commands.launch import add_bench, add_demo, add_robots, add_show
+from clik.commands.bench import add_bench
+from clik.commands.launch import add_demo, add_robots, add_show
 from clik.commands.reach import add_reach
 from clik.commands.solve import add_solve
 from clik.commands.sweep import add_sweep

@@ -1,4 +1,6 @@
-"""The numbers of issue 24's closing note: ``python tests/several_tasks_runs.py``.
+"""The numbers of issue 24's closing note: ``python -m tests.several_tasks_runs``.
+
+Run from the checkout's root (it imports the bench's ``benchmarks`` package).
 
 Each line is measured here, in the compiled engine, on the acceptance tests' setups
 (:mod:`tests.loop.test_several_tasks`): the box's width, the elbow's drift, the CoM's
@@ -14,7 +16,7 @@ import warnings
 import numpy as np
 
 import clik
-from clik.bench.step_dual_arm import dual_arm
+from benchmarks.step_dual_arm import dual_arm
 from clik.trajectory import Circle, Hold, JointPath, Line, PoseTrajectory
 from tests.loop.test_several_tasks import ARM_Q0, bent, box_goals, margin, pose_line, swivel
 

@@ -6,18 +6,24 @@ is still a circle for a reader. Also: rooms (at most 12 top-level modules, every
 subpackage documented, no circle between rooms), modules and C++ sources within 500
 lines, no Python attribute read by name from C++, and every constant both engines
 declare checked to agree (``tests/loop/test_engine_constants.py``).
+
+The benchmark suite (``benchmarks/``, beside ``clik/``) keeps the same size, citation
+and no-circle rules; no module of ``clik`` imports it, nor the tools it compares clik
+with (pink, mink): clik imports and runs without them.
 """
 
 from __future__ import annotations
 
 import ast
 import re
+from collections.abc import Mapping
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "clik"
+BENCHMARKS = ROOT / "benchmarks"
 METHOD = ROOT / "docs" / "method.md"
 
 MAX_FUNCTION_LINES = 80
@@ -27,7 +33,6 @@ APPLICATIONS = (
     "clik.cli",
     "clik.commands",
     "clik.demo",
-    "clik.bench",
     "clik.sweep",
     "clik.viz",
     "clik.plot",
@@ -36,16 +41,20 @@ APPLICATIONS = (
 
 
 def module_name(path: Path) -> str:
-    """Dotted name of a module file under ``clik/``."""
+    """Dotted name of a module file under ``clik/`` (or ``benchmarks/``)."""
     parts = path.relative_to(ROOT).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
 MODULES = {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+BENCH_MODULES = {module_name(p): p for p in sorted(BENCHMARKS.rglob("*.py"))}
+SOURCES = {**MODULES, **BENCH_MODULES}
+"""Every Python module the size and citation rules read: clik's and the suite's."""
 
 
-def imported(name: str, path: Path) -> set[str]:
-    """The ``clik`` modules that module ``name`` imports, anywhere in its file."""
+def all_imports(name: str, path: Path, known: Mapping[str, Path] = MODULES) -> set[str]:
+    """Every module that module ``name`` imports, anywhere in its file, relative imports
+    resolved (``from a import b`` counts as ``a.b`` when that is in ``known``, else ``a``)."""
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found: set[str] = set()
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
@@ -58,11 +67,17 @@ def imported(name: str, path: Path) -> set[str]:
                 base = ".".join([*parent, *([base] if base else [])])
             for alias in node.names:
                 sub = f"{base}.{alias.name}"
-                found.add(sub if sub in MODULES else base)
-    return {m for m in found if m in MODULES and m != name}
+                found.add(sub if sub in known else base)
+    return found
+
+
+def imported(name: str, path: Path, known: Mapping[str, Path] = MODULES) -> set[str]:
+    """The modules of ``known`` (default clik's) that module ``name`` imports."""
+    return {m for m in all_imports(name, path, known) if m in known and m != name}
 
 
 GRAPH = {name: imported(name, path) for name, path in MODULES.items()}
+BENCH_GRAPH = {name: imported(name, path, BENCH_MODULES) for name, path in BENCH_MODULES.items()}
 
 
 def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
@@ -109,6 +124,42 @@ def test_no_import_circle_among_clik_modules():
     assert cycles(GRAPH) == []
 
 
+def test_no_import_circle_among_benchmark_modules():
+    assert len(BENCH_GRAPH) > 10  # the suite is found (benchmarks/)
+    assert cycles(BENCH_GRAPH) == []
+
+
+NOT_FOR_CLIK = ("benchmarks", "pink", "mink")
+"""Packages no module of ``clik`` may import: the benchmark suite (it lives beside the
+package, in a checkout) and the peers it compares clik with. ``clik bench``
+(:mod:`clik.commands.bench`) loads the suite by name at run time, from a checkout.
+MuJoCo is not listed: it may become a dependency of MJCF loading (``clik.model``)."""
+
+
+def forbidden_imports(name: str, path: Path) -> list[str]:
+    """The imports of module ``name`` whose top-level package is in :data:`NOT_FOR_CLIK`."""
+    return sorted(m for m in all_imports(name, path) if m.split(".")[0] in NOT_FOR_CLIK)
+
+
+def test_the_forbidden_import_finder_finds_them(tmp_path):
+    module = tmp_path / "m.py"
+    module.write_text(
+        "import pink\nfrom mink.tasks import FrameTask\nimport benchmarks.suite as s\n"
+        "def f():\n    from benchmarks import suite\nimport numpy, clik\n"
+    )
+    assert forbidden_imports("clik.m", module) == [
+        "benchmarks",
+        "benchmarks.suite",
+        "mink.tasks",
+        "pink",
+    ]
+
+
+@pytest.mark.parametrize("name", sorted(MODULES))
+def test_clik_imports_neither_the_benchmarks_nor_pink_nor_mink(name):
+    assert forbidden_imports(name, MODULES[name]) == []
+
+
 def _is_application(name: str) -> bool:
     return any(name == app or name.startswith(app + ".") for app in APPLICATIONS)
 
@@ -134,9 +185,9 @@ def long_functions(path: Path) -> list[tuple[str, int]]:
     ]
 
 
-@pytest.mark.parametrize("name", sorted(MODULES))
+@pytest.mark.parametrize("name", sorted(SOURCES))
 def test_functions_fit_on_a_screen(name):
-    assert long_functions(MODULES[name]) == []
+    assert long_functions(SOURCES[name]) == []
 
 
 CITATION = re.compile(r"(?<![\w)\]])\((\d{1,2})\)(?:\s*-\s*\((\d{1,2})\))?")
@@ -157,14 +208,14 @@ def test_citation_pattern():
 
 
 def test_every_equation_cited_in_clik_is_in_docs_method():
-    in_code = set().union(*(cited(p.read_text()) for p in MODULES.values()))
+    in_code = set().union(*(cited(p.read_text()) for p in SOURCES.values()))
     assert in_code, "no citation found: the pattern is wrong"
     documented = cited(METHOD.read_text())
     assert sorted(in_code - documented) == []
 
 
 def test_code_points_at_the_shipped_method():
-    assert not [n for n, p in MODULES.items() if "METHOD.md" in p.read_text()]
+    assert not [n for n, p in SOURCES.items() if "METHOD.md" in p.read_text()]
     readme = (ROOT / "README.md").read_text()
     assert "docs/method.md" in readme
 
@@ -177,7 +228,8 @@ MAX_TOP_LEVEL_MODULES = 12
 """Modules directly in ``clik/`` (``__init__.py`` and subpackages aside)."""
 
 MAX_FILE_LINES = 500
-"""Longest Python module under ``clik/`` and C++ source under ``src/engine/``."""
+"""Longest Python module under ``clik/`` and ``benchmarks/``, and C++ source under
+``src/engine/``."""
 
 CXX_SUFFIXES = (".hpp", ".cpp", ".hxx", ".h")
 
@@ -206,15 +258,15 @@ def test_at_most_twelve_top_level_modules():
 def test_every_subpackage_says_what_it_holds():
     bare = [
         str(p.relative_to(ROOT))
-        for p in sorted(PACKAGE.rglob("__init__.py"))
+        for p in sorted([*PACKAGE.rglob("__init__.py"), *BENCHMARKS.rglob("__init__.py")])
         if not (p.read_text(encoding="utf-8").lstrip().startswith(('"""', 'r"""')))
     ]
     assert bare == []
 
 
-@pytest.mark.parametrize("name", sorted(MODULES))
+@pytest.mark.parametrize("name", sorted(SOURCES))
 def test_python_module_within_500_lines(name):
-    assert line_count(MODULES[name]) <= MAX_FILE_LINES
+    assert line_count(SOURCES[name]) <= MAX_FILE_LINES
 
 
 @pytest.mark.parametrize("path", CXX_SOURCES, ids=lambda p: str(p.relative_to(ENGINE)))

@@ -5,8 +5,8 @@ For each robot: a position task on the last frame of the deepest chain, a 5 cm l
 3 cm whose centre is 10 cm ahead along the line (threshold ``d_o`` = 3 cm) and joint-range
 rows at 2 deg. The line ends 1 cm inside the threshold: the task and the obstacle
 constraint conflict, the paper's deadlock case. The run is defined once, in
-:mod:`clik.bench.zoo` (the bench times it too). ``python tests/zoo_runs.py`` prints the
-table of the closing note.
+:mod:`benchmarks.zoo` (the bench times it too). ``python -m tests.zoo_runs``, from the
+checkout's root, prints the table of the closing note.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import clik
-from clik.bench.zoo import DIRECTION, ZooSetup, zoo_setup
+from benchmarks.zoo import DIRECTION, ZooSetup, zoo_setup
 
 
 @dataclass

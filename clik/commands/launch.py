@@ -1,9 +1,9 @@
-"""``clik demo``, ``clik show``, ``clik bench`` and ``clik robots``: each hands over to one room.
+"""``clik demo``, ``clik show`` and ``clik robots``: each hands over to one room.
 
-The case study (:mod:`clik.demo`), the live 3-D view (:mod:`clik.viz`), the
-benchmark suite (:mod:`clik.bench`) and the robots known by name
-(:class:`~clik.model.robot.Robot`) or found in a ROS workspace
-(:mod:`clik.model.descriptions`); these commands only read their flags.
+The case study (:mod:`clik.demo`), the live 3-D view (:mod:`clik.viz`) and the robots
+known by name (:class:`~clik.model.robot.Robot`) or found in a ROS workspace
+(:mod:`clik.model.descriptions`); these commands only read their flags. ``clik bench``
+is :mod:`clik.commands.bench`.
 """
 
 from __future__ import annotations
@@ -31,14 +31,6 @@ def cmd_show(args: argparse.Namespace) -> int:
     from clik.viz import show_path
 
     show_path(Path(args.target), block=not args.no_block)
-    return 0
-
-
-def cmd_bench(args: argparse.Namespace) -> int:
-    """``clik bench``: the benchmark suite (``bench.json``, ``bench.md``)."""
-    from clik.bench.suite import run_bench
-
-    run_bench(Path(args.out), quick=args.quick, log=None if args.quiet else print)
     return 0
 
 
@@ -120,12 +112,3 @@ def add_robots(sub: Any) -> None:
         help="list the robot descriptions (URDF, xacro) in the ROS packages under this folder",
     )
     r.set_defaults(func=cmd_robots)
-
-
-def add_bench(sub: Any) -> None:
-    """The ``clik bench`` subcommand."""
-    b = sub.add_parser("bench", help="run the benchmark suite (writes bench.json, bench.md)")
-    b.add_argument("--out", default="out/bench", help="output folder")
-    b.add_argument("--quick", action="store_true", help="a smoke run of a few seconds")
-    b.add_argument("--quiet", action="store_true")
-    b.set_defaults(func=cmd_bench)

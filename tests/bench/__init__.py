@@ -1,1 +1,1 @@
-"""Tests of :mod:`clik.bench`."""
+"""Tests of the benchmark suite (``benchmarks/``) and of how ``clik bench`` finds it."""

@@ -7,7 +7,7 @@ from typing import Any
 
 import pytest
 
-from clik.bench.suite import run_bench
+from benchmarks.suite import run_bench
 
 
 @pytest.fixture(scope="session")

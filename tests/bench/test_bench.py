@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import ast
 import importlib.util
 import json
 import math
@@ -11,12 +10,10 @@ from typing import Any
 
 import pytest
 
-from clik.bench.config import QUICK
-from clik.bench.suite import REQUIRED_KEYS
-from clik.bench.targets import default_targets_path, evaluate_targets, load_targets
+from benchmarks.config import QUICK
+from benchmarks.suite import REQUIRED_KEYS
+from benchmarks.targets import default_targets_path, evaluate_targets, load_targets
 from clik.errors import InputError
-
-CLIK = Path(__file__).resolve().parents[2] / "clik"
 
 HAS_PINK = importlib.util.find_spec("pink") is not None and (
     importlib.util.find_spec("daqp") is not None or importlib.util.find_spec("quadprog") is not None
@@ -280,40 +277,6 @@ def test_markdown_names_no_issue(quick):
     text = (out / "bench.md").read_text()
     assert "## Targets\n" in text
     assert "issue" not in text.lower()
-
-
-def _imports(path: Path) -> set[str]:
-    """Modules a file imports (every import statement, TYPE_CHECKING blocks included)."""
-    names: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.Import):
-            names.update(alias.name for alias in node.names)
-        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            names.add(node.module)
-            names.update(f"{node.module}.{alias.name}" for alias in node.names)
-    return names
-
-
-def test_bench_imports_flow_one_way():
-    for path in CLIK.rglob("*.py"):
-        if path.parts[-2] == "bench" or path == CLIK / "cli.py" or path.parent == CLIK / "commands":
-            continue
-        bad = {m for m in _imports(path) if m == "clik.bench" or m.startswith("clik.bench.")}
-        assert not bad, (path, bad)
-    modules = {f"clik.bench.{p.stem}": _imports(p) for p in (CLIK / "bench").glob("*.py")}
-    graph = {m: {d for d in deps if d in modules and d != m} for m, deps in modules.items()}
-    done: set[str] = set()
-
-    def visit(module: str, stack: tuple[str, ...]) -> None:
-        assert module not in stack, f"import cycle: {' -> '.join((*stack, module))}"
-        if module in done:
-            return
-        for dep in graph[module]:
-            visit(dep, (*stack, module))
-        done.add(module)
-
-    for module in graph:
-        visit(module, ())
 
 
 def test_an_out_that_cannot_be_a_folder_is_refused_before_the_bench(tmp_path, capsys):

@@ -13,15 +13,15 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from clik.bench import suite
-from clik.bench.config import QUICK
-from clik.bench.mink_backend import find_mink
-from clik.bench.pink_backend import find_pink
-from clik.bench.step_lines import OBSTACLE_RADIUS, OBSTACLES_ONE_ACTIVE, panda_setup
-from clik.bench.tick import TICK_LINES, bench_ticks
-from clik.bench.tick_clik import clik_tick_variants
-from clik.bench.tick_quality import QualityCheck
-from clik.bench.tick_variant import tick_reference
+from benchmarks import suite
+from benchmarks.config import QUICK
+from benchmarks.mink_backend import find_mink
+from benchmarks.pink_backend import find_pink
+from benchmarks.step_lines import OBSTACLE_RADIUS, OBSTACLES_ONE_ACTIVE, panda_setup
+from benchmarks.tick import TICK_LINES, bench_ticks
+from benchmarks.tick_clik import clik_tick_variants
+from benchmarks.tick_quality import QualityCheck
+from benchmarks.tick_variant import tick_reference
 
 SHORT = dataclasses.replace(QUICK, panda_duration=0.02)
 """A 21-tick line: enough to check a line, a fraction of a second."""

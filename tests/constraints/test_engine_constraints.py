@@ -22,7 +22,7 @@ import pinocchio as pin
 import pytest
 
 import clik
-from clik.bench.step_lines import OBSTACLES_ONE_ACTIVE, PANDA_TRANSPOSE_GAIN
+from benchmarks.step_lines import OBSTACLES_ONE_ACTIVE, PANDA_TRANSPOSE_GAIN
 from clik.constraints import ConstraintSet, Dexterity, JointLimits, Obstacle
 from clik.scenarios import scenario_path
 from clik.scenarios.runner import build

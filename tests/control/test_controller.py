@@ -15,7 +15,7 @@ import pinocchio as pin
 import pytest
 
 import clik
-from clik.bench.step_lines import OBSTACLES_ONE_ACTIVE, Prefix, obstacle_set
+from benchmarks.step_lines import OBSTACLES_ONE_ACTIVE, Prefix, obstacle_set
 from clik.scenarios import scenario_path
 from clik.scenarios.runner import Run, build
 from tests.limits_check import assert_completed, assert_within_limits

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import gc
 
-from clik.bench.rss import proc_status_kb
-from clik.bench.session_memory import blinking
+from benchmarks.rss import proc_status_kb
+from benchmarks.session_memory import blinking
 
 
 def test_a_long_session_with_events_at_every_tick_keeps_memory_flat() -> None:

@@ -330,8 +330,8 @@ def test_dexterity_scenario_agrees(law, row_gain):
 @pytest.mark.parametrize("law", ["pseudoinverse", "transpose"])
 def test_panda_circle_with_obstacles_and_joint_ranges_agrees(law):
     """The bench's scene: the Panda's circle, 3 spheres against every link, joint ranges."""
-    from clik.bench.config import QUICK
-    from clik.bench.step_lines import (
+    from benchmarks.config import QUICK
+    from benchmarks.step_lines import (
         OBSTACLES_ONE_ACTIVE,
         PSEUDOINVERSE,
         TRANSPOSE,

@@ -1,49 +1,56 @@
 """``clik bench``: the performance suite, with pink side by side, in one process.
 
+The suite lives in the repository, beside ``clik/``, not in the package: clik imports
+neither it nor pink, mink or MuJoCo, and a clik installed from a wheel runs without
+them. ``clik bench`` (:mod:`clik.commands.bench`) finds this folder in the checkout the
+running clik was imported from (an editable install), else in the working folder, and
+runs :func:`benchmarks.suite.run_bench`; from the checkout's root,
+``python -m benchmarks --out DIR [--quick]`` does the same.
+
 What is measured (all through clik's public API, on the machine it runs on):
 
-- **Step cost** [us per sample] (:mod:`clik.bench.step`): whole runs of
+- **Step cost** [us per sample] (:mod:`benchmarks.step`): whole runs of
   :meth:`clik.Tracker.run`, ``result.wall_time_s / result.steps`` (the loop's own
   cost: kinematics, law, constraints, recording; the trajectory is sampled before
   the clock starts). Every clik line runs in the compiled engine (``clik._engine``,
   the line's own key) and in the Python one (its ``python_`` twin), interleaved
-  with the others. Lines (:mod:`clik.bench.step_lines`): the planar 4R arm on the
+  with the others. Lines (:mod:`benchmarks.step_lines`): the planar 4R arm on the
   case study's line (law (9)); the Panda's pose task on the shipped circle
   (``panda_circle``) with law (10) and with law (9) (per-row gains inside the
   explicit-Euler bound); the same with three sphere obstacles against every link's
   convex collision geometry and joint-range rows monitored, placed so that no
-  obstacle row, or one, is active; and pink's step (:mod:`clik.bench.step_pink`:
+  obstacle row, or one, is active; and pink's step (:mod:`benchmarks.step_pink`:
   ``FrameTask`` + ``PostureTask``, ``ConfigurationLimit``, ``solve_ik`` +
   ``integrate_inplace``) on the same model and reference, and with its collision
   barrier on the same spheres (``pink_panda_pose_obstacles``).
-- **Tick cost** [us per tick] (:mod:`clik.bench.tick`): one Python call per 1 ms
+- **Tick cost** [us per tick] (:mod:`benchmarks.tick`): one Python call per 1 ms
   tick on the same Panda circle, timed over the whole per-tick loop:
   :class:`clik.Controller` (``ctl.step(x_d(t_k), (v_d, w_d)(t_k))``, law (10)),
-  pink (:mod:`clik.bench.tick_pink`) and mink through MuJoCo on the same URDF
-  (:mod:`clik.bench.tick_mink`, :mod:`clik.bench.mujoco_panda`), each given the
+  pink (:mod:`benchmarks.tick_pink`) and mink through MuJoCo on the same URDF
+  (:mod:`benchmarks.tick_mink`, :mod:`benchmarks.mujoco_panda`), each given the
   look-ahead target ``x_d(t_k+1)`` as their examples do; without and with the three
   spheres (clik's obstacle rows, pink's ``SelfCollisionBarrier`` on the spheres
-  added to its collision model, :mod:`clik.bench.pink_barrier`; mink's
+  added to its collision model, :mod:`benchmarks.pink_barrier`; mink's
   ``CollisionAvoidanceLimit``). Every line's recorded joints go through one check
-  (:mod:`clik.bench.tick_quality`): pose errors, clearance to the spheres (coal),
+  (:mod:`benchmarks.tick_quality`): pose errors, clearance to the spheres (coal),
   joint speed over the URDF limits.
-- **Zoo obstacle run** [us per sample] (:mod:`clik.bench.step_zoo`): the zoo test's
-  run (:mod:`clik.bench.zoo`: every robot, a 5 cm line toward a 3 cm sphere, law (10),
+- **Zoo obstacle run** [us per sample] (:mod:`benchmarks.step_zoo`): the zoo test's
+  run (:mod:`benchmarks.zoo`: every robot, a 5 cm line toward a 3 cm sphere, law (10),
   joint-range rows) in the compiled engine, robot by robot; the median over robots
   (robots refused before running are skipped and counted).
-- **Single-pose solve** (:mod:`clik.bench.solve`): seeded random reachable Panda
+- **Single-pose solve** (:mod:`benchmarks.solve`): seeded random reachable Panda
   poses (forward kinematics of random configurations inside the limits), from the
   reference configuration, tolerance 1e-4 m and 1e-3 rad, checked independently of
   each solver (``|p_d - p|`` and ``|log3(R_d R^T)|``): :func:`clik.solve` (compiled
   and Python engines) against pink iterated to convergence (capped,
-  :mod:`clik.bench.solve_pink`) on the same targets.
-- **Case study** (:mod:`clik.bench.case_study`): the eight shipped runs
+  :mod:`benchmarks.solve_pink`) on the same targets.
+- **Case study** (:mod:`benchmarks.case_study`): the eight shipped runs
   (:data:`clik.scenarios.CASE_STUDY`), total wall time of ``execute()``, with and
   without building (robot loading).
-- **Memory** (:mod:`clik.bench.memory`): peak RSS growth of a 10^6-sample planar run
+- **Memory** (:mod:`benchmarks.memory`): peak RSS growth of a 10^6-sample planar run
   with full recording and with ``record_every`` decimation, each in a fresh
   subprocess.
-- **Sweep** (:mod:`clik.bench.sweep_rate`): runs per second of a fixed sweep on a
+- **Sweep** (:mod:`benchmarks.sweep_rate`): runs per second of a fixed sweep on a
   local Dask cluster of 1 and of 2 workers.
 
 Fairness: the compared step variants run interleaved, one whole run of each per
@@ -54,9 +61,8 @@ medians over rounds (or targets) with p10 and p90; ratios (``ratios`` in
 engine's median from the same rounds.
 
 The targets each figure is compared with are data, ``targets.toml`` beside this
-file (:mod:`clik.bench.targets`). :func:`clik.bench.suite.run_bench` writes
-``out/bench.json`` and ``out/bench.md`` (:mod:`clik.bench.report`); pink, mink and
+file (:mod:`benchmarks.targets`). :func:`benchmarks.suite.run_bench` writes
+``out/bench.json`` and ``out/bench.md`` (:mod:`benchmarks.report`); pink, mink and
 MuJoCo (``pip install clik[bench]``) are optional: without one, its lines are
 ``null``, the log and ``bench.md`` say why, and its targets are neither met nor missed.
-``python -m clik.bench --out DIR [--quick]`` runs it from a shell.
 """

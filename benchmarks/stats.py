@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from clik.bench.config import DT
+from benchmarks.config import DT
 
 
 def stats(values: list[float] | np.ndarray) -> dict[str, float | int]:

@@ -11,8 +11,8 @@ import numpy as np
 import pinocchio as pin
 
 import clik
-from clik.bench.pink_backend import PINK_DAMPING, Pink
-from clik.bench.pose_error import ORIENTATION_TOLERANCE, POSITION_TOLERANCE
+from benchmarks.pink_backend import PINK_DAMPING, Pink
+from benchmarks.pose_error import ORIENTATION_TOLERANCE, POSITION_TOLERANCE
 
 PINK_LM_DAMPING = 1e-3
 """Levenberg-Marquardt damping of pink's frame task in the solve benchmark."""

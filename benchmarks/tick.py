@@ -1,11 +1,11 @@
 """Tick cost [us per tick]: clik's controller, pink and mink stepped once per 1 ms tick.
 
-Every tick line (:mod:`clik.bench.tick_clik`, :mod:`clik.bench.tick_pink`,
-:mod:`clik.bench.tick_mink`) runs the Panda's pose task on the shipped circle, one
+Every tick line (:mod:`benchmarks.tick_clik`, :mod:`benchmarks.tick_pink`,
+:mod:`benchmarks.tick_mink`) runs the Panda's pose task on the shipped circle, one
 Python call per tick, timed over the whole per-tick loop; its figure is the median
-over interleaved rounds of the per-tick mean (:func:`~clik.bench.step.interleaved_rounds`,
+over interleaved rounds of the per-tick mean (:func:`~benchmarks.step.interleaved_rounds`,
 as the step lines). Its joints then go through the same quality check
-(:class:`~clik.bench.tick_quality.QualityCheck`). A library that is not installed
+(:class:`~benchmarks.tick_quality.QualityCheck`). A library that is not installed
 leaves its lines out.
 """
 
@@ -13,17 +13,17 @@ from __future__ import annotations
 
 from typing import Any
 
-from clik.bench.config import BenchConfig, Log
-from clik.bench.mink_backend import Mink
-from clik.bench.pink_backend import Pink
-from clik.bench.stats import line_timing
-from clik.bench.step import interleaved_rounds
-from clik.bench.step_lines import OBSTACLE_RADIUS, OBSTACLES_ONE_ACTIVE, panda_setup
-from clik.bench.tick_clik import clik_tick_variants
-from clik.bench.tick_mink import mink_tick_variants
-from clik.bench.tick_pink import pink_tick_variants
-from clik.bench.tick_quality import QualityCheck
-from clik.bench.tick_variant import TickVariant, tick_reference
+from benchmarks.config import BenchConfig, Log
+from benchmarks.mink_backend import Mink
+from benchmarks.pink_backend import Pink
+from benchmarks.stats import line_timing
+from benchmarks.step import interleaved_rounds
+from benchmarks.step_lines import OBSTACLE_RADIUS, OBSTACLES_ONE_ACTIVE, panda_setup
+from benchmarks.tick_clik import clik_tick_variants
+from benchmarks.tick_mink import mink_tick_variants
+from benchmarks.tick_pink import pink_tick_variants
+from benchmarks.tick_quality import QualityCheck
+from benchmarks.tick_variant import TickVariant, tick_reference
 
 TICK_LINES = (
     "panda_pose",
@@ -51,7 +51,7 @@ def bench_ticks(
     Returns:
         Per line that ran (in :data:`TICK_LINES` order): its description, median, p10,
         p90 and min [us per tick], runs, ticks per run, real-time factor, its last
-        run's info and ``quality`` (:class:`~clik.bench.tick_quality.QualityCheck`).
+        run's info and ``quality`` (:class:`~benchmarks.tick_quality.QualityCheck`).
     """
     panda = panda_setup(config)
     reference = tick_reference(panda.trajectory)

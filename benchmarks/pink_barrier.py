@@ -7,7 +7,7 @@ configuration's collision model, whatever they hold, and keeps their coal
 distances above ``d_min`` through each pair's witness points. So the spheres
 enter pink's collision model as ``coal.Sphere`` geometries on the world joint,
 paired with each of the Panda's link geometries (the convex hulls clik collides,
-:func:`~clik.bench.sphere_scene.sphere_geometry`): like against like, 3 x 17 pairs.
+:func:`~benchmarks.sphere_scene.sphere_geometry`): like against like, 3 x 17 pairs.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from typing import Any
 import pinocchio as pin
 
 import clik
-from clik.bench.sphere_scene import sphere_geometry
+from benchmarks.sphere_scene import sphere_geometry
 
 OBSTACLE_THRESHOLD = 0.03
 """The distance every tool keeps from a sphere [m]: clik's default obstacle threshold

@@ -7,7 +7,7 @@ rows at 2 deg. The line ends 1 cm inside the threshold: the task and the obstacl
 constraint conflict, the paper's deadlock case.
 
 This module is the run's one definition: the zoo test (``tests/zoo_runs.py``) runs it
-and checks every outcome; the bench (:mod:`clik.bench.step_zoo`) times it.
+and checks every outcome; the bench (:mod:`benchmarks.step_zoo`) times it.
 """
 
 from __future__ import annotations

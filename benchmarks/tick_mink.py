@@ -3,7 +3,7 @@
 mink's ``examples/franka_emika_panda.py`` setting (``FrameTask`` of costs 1 with
 ``lm_damping`` 1, ``PostureTask`` of cost 1e-2, ``solve_ik`` damping 1e-3), with
 ``ConfigurationLimit`` and daqp, on the Panda clik loads
-(:mod:`clik.bench.mujoco_panda`): one QP per tick, given the look-ahead target
+(:mod:`benchmarks.mujoco_panda`): one QP per tick, given the look-ahead target
 ``x_d(t_k+1)`` as its examples set the target then solve. With the spheres, mink's
 ``CollisionAvoidanceLimit`` between the arm's geoms and the three sphere geoms.
 """
@@ -18,13 +18,13 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from clik.bench.config import DT
-from clik.bench.mink_backend import Mink
-from clik.bench.mujoco_panda import SPHERE_PREFIX, panda_with_spheres
-from clik.bench.pink_barrier import OBSTACLE_THRESHOLD
-from clik.bench.step_lines import OBSTACLE_RADIUS, OBSTACLES_ONE_ACTIVE, PandaSetup
-from clik.bench.step_variant import RunOutcome
-from clik.bench.tick_variant import TickReference, TickVariant
+from benchmarks.config import DT
+from benchmarks.mink_backend import Mink
+from benchmarks.mujoco_panda import SPHERE_PREFIX, panda_with_spheres
+from benchmarks.pink_barrier import OBSTACLE_THRESHOLD
+from benchmarks.step_lines import OBSTACLE_RADIUS, OBSTACLES_ONE_ACTIVE, PandaSetup
+from benchmarks.step_variant import RunOutcome
+from benchmarks.tick_variant import TickReference, TickVariant
 
 MINK_POSTURE_COST = 1e-2
 """Cost of mink's posture task (its example's)."""
@@ -133,7 +133,7 @@ def mink_tick_variant(
         panda: The Panda setup.
         reference: The reference at every tick.
         obstacles: Whether to add the spheres of
-            :data:`~clik.bench.step_lines.OBSTACLES_ONE_ACTIVE` and mink's collision limit.
+            :data:`~benchmarks.step_lines.OBSTACLES_ONE_ACTIVE` and mink's collision limit.
     """
     mink = mj.module
     centres = OBSTACLES_ONE_ACTIVE if obstacles else ()

@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from clik.bench.config import BenchConfig, Log
-from clik.bench.stats import stats
+from benchmarks.config import BenchConfig, Log
+from benchmarks.stats import stats
 from clik.scenarios import CASE_STUDY, scenario_path
 from clik.scenarios.runner import build
 

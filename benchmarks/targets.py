@@ -15,7 +15,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from clik.bench.stats import ratio
+from benchmarks.stats import ratio
 from clik.errors import InputError
 
 if sys.version_info >= (3, 11):
@@ -36,7 +36,7 @@ _TEXT_FIELDS = ("name", "measure", "op", "wanted")
 
 def default_targets_path() -> Path:
     """The shipped ``targets.toml`` (beside this module)."""
-    return Path(str(resources.files("clik.bench").joinpath("targets.toml")))
+    return Path(str(resources.files("benchmarks").joinpath("targets.toml")))
 
 
 def lookup(report: Mapping[str, Any], dotted: str) -> Any:

@@ -7,24 +7,15 @@ neither the suite's other lines nor the other measurement leave memory behind.
 from __future__ import annotations
 
 import gc
-import json
-import subprocess
-import sys
 from typing import Any
 
 import numpy as np
 
 import clik
-from clik.bench.config import DT, BenchConfig, Log
-from clik.bench.rss import peak_rss_bytes, rss_baseline
+from benchmarks.config import DT, BenchConfig, Log
+from benchmarks.fresh import run_fresh
+from benchmarks.rss import peak_rss_bytes, rss_baseline
 from clik.trajectory import Line
-
-_CHILD = (
-    "import json, sys\n"
-    "from clik.bench.memory import memory_child\n"
-    "print(json.dumps(memory_child(int(sys.argv[1]), int(sys.argv[2]))))\n"
-)
-"""What the subprocess runs: one :func:`memory_child`, its report as the last line."""
 
 
 def memory_child(samples: int, record_every: int) -> dict[str, Any]:
@@ -32,7 +23,7 @@ def memory_child(samples: int, record_every: int) -> dict[str, Any]:
 
     The baseline is the RSS after loading the robot, building the tracker and a
     10-sample warm-up run (the peak is reset there, see
-    :func:`~clik.bench.rss.rss_baseline`); the growth is the peak RSS during the big
+    :func:`~benchmarks.rss.rss_baseline`); the growth is the peak RSS during the big
     run (trajectory sampling, recording, the result) minus that baseline
     [MB = 1e6 bytes].
 
@@ -76,16 +67,7 @@ def memory_run(samples: int, record_every: int) -> dict[str, Any]:
     Raises:
         RuntimeError: The subprocess failed (its stderr's end in the message).
     """
-    proc = subprocess.run(
-        [sys.executable, "-c", _CHILD, str(samples), str(record_every)],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-    if proc.returncode != 0:
-        raise RuntimeError(f"memory subprocess failed:\n{proc.stderr[-2000:]}")
-    result: dict[str, Any] = json.loads(proc.stdout.strip().splitlines()[-1])
-    return result
+    return run_fresh(memory_child, samples, record_every, what="memory")
 
 
 def bench_memory(config: BenchConfig, log: Log) -> dict[str, Any]:

@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 
 import clik
-from clik.bench.config import DT
-from clik.bench.step_lines import OBSTACLES_ONE_ACTIVE, PSEUDOINVERSE, PandaSetup, obstacle_set
-from clik.bench.step_variant import RunOutcome
-from clik.bench.tick_variant import TickReference, TickVariant
+from benchmarks.config import DT
+from benchmarks.step_lines import OBSTACLES_ONE_ACTIVE, PSEUDOINVERSE, PandaSetup, obstacle_set
+from benchmarks.step_variant import RunOutcome
+from benchmarks.tick_variant import TickReference, TickVariant
 
 
 def _controller_run(
@@ -64,8 +64,8 @@ def clik_tick_variant(
         description: One sentence for ``bench.md``.
         panda: The Panda setup (robot, task, start).
         reference: The reference at every tick.
-        obstacles: Whether to add :data:`~clik.bench.step_lines.OBSTACLES_ONE_ACTIVE` and
-            the joint-range rows (:func:`~clik.bench.step_lines.obstacle_set`).
+        obstacles: Whether to add :data:`~benchmarks.step_lines.OBSTACLES_ONE_ACTIVE` and
+            the joint-range rows (:func:`~benchmarks.step_lines.obstacle_set`).
     """
     constraints = obstacle_set(panda.robot, OBSTACLES_ONE_ACTIVE) if obstacles else None
     ctl = clik.Controller(

@@ -5,30 +5,22 @@ away in turn (``Controller.step(target, obstacles=...)``): at every tick one obs
 activates and another releases. The controller keeps its last ``record_size`` ticks and
 its last ``event_size`` events, so its RSS must not grow once they are full (by 10 % of
 the session), and ``result()`` must cost what they hold. Runs in a fresh interpreter
-(:func:`session_child`), like :mod:`clik.bench.memory`.
+(:func:`session_child`), like :mod:`benchmarks.memory`.
 """
 
 from __future__ import annotations
 
 import gc
-import json
-import subprocess
-import sys
 import time
 from typing import Any
 
 import numpy as np
 
 import clik
-from clik.bench.config import DT, BenchConfig, Log
-from clik.bench.rss import proc_status_kb
+from benchmarks.config import DT, BenchConfig, Log
+from benchmarks.fresh import run_fresh
+from benchmarks.rss import proc_status_kb
 from clik.constraints import ConstraintSet, JointLimits, Obstacle
-
-_CHILD = (
-    "import json, sys\n"
-    "from clik.bench.session_memory import session_child\n"
-    "print(json.dumps(session_child(int(sys.argv[1]))))\n"
-)
 
 RECORD_SIZE = 10_000
 """The session's record and event log (the controller's defaults)."""
@@ -122,14 +114,6 @@ def bench_session(config: BenchConfig, log: Log) -> dict[str, Any]:
     Raises:
         RuntimeError: The subprocess failed (its stderr's end in the message).
     """
-    proc = subprocess.run(
-        [sys.executable, "-c", _CHILD, str(config.session_ticks)],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-    if proc.returncode != 0:
-        raise RuntimeError(f"session memory subprocess failed:\n{proc.stderr[-2000:]}")
+    result = run_fresh(session_child, config.session_ticks, what="session memory")
     log("  memory: a controller session done")
-    result: dict[str, Any] = json.loads(proc.stdout.strip().splitlines()[-1])
     return result

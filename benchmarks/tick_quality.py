@@ -3,7 +3,7 @@
 Every tool's joints go through the same check: Pinocchio's forward kinematics of
 the Panda for the pose errors against the tick's own desired pose ``x_d(t_k)``,
 the robot's collision geometry placed by Pinocchio and coal's distances to the
-spheres for the clearance (:func:`~clik.bench.sphere_scene.sphere_geometry`: the
+spheres for the clearance (:func:`~benchmarks.sphere_scene.sphere_geometry`: the
 link geometries' convex hulls, as clik and MuJoCo collide them), and the joints'
 differences for the speed.
 """
@@ -17,10 +17,10 @@ import numpy as np
 import pinocchio as pin
 
 import clik
-from clik.bench.config import DT
-from clik.bench.pose_error import pose_errors
-from clik.bench.sphere_scene import sphere_geometry
-from clik.bench.tick_variant import TickReference
+from benchmarks.config import DT
+from benchmarks.pose_error import pose_errors
+from benchmarks.sphere_scene import sphere_geometry
+from benchmarks.tick_variant import TickReference
 
 CLEARANCE_EVERY = 10
 """The clearance is computed on every 10th recorded tick (and on the last)."""

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from clik.bench.cells import fmt
-from clik.bench.tick import TICK_LINES
-from clik.bench.tick_quality import CLEARANCE_EVERY
+from benchmarks.cells import fmt
+from benchmarks.tick import TICK_LINES
+from benchmarks.tick_quality import CLEARANCE_EVERY
 
 PEERS = ("pink", "mink")
 

@@ -1,4 +1,4 @@
-"""Step cost of the zoo's obstacle run (:mod:`clik.bench.zoo`), robot by robot.
+"""Step cost of the zoo's obstacle run (:mod:`benchmarks.zoo`), robot by robot.
 
 Each robot is loaded and its run built (not timed), run once as a warm-up, then
 ``zoo_rounds`` times with the compiled engine; its cost is the median of
@@ -16,9 +16,9 @@ from typing import Any
 import numpy as np
 
 import clik
-from clik.bench.config import BenchConfig, Log
-from clik.bench.stats import stats
-from clik.bench.zoo import zoo_setup
+from benchmarks.config import BenchConfig, Log
+from benchmarks.stats import stats
+from benchmarks.zoo import zoo_setup
 
 
 def zoo_robot_cost(name: str, rounds: int) -> dict[str, Any]:

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from clik.bench.cells import fmt
-from clik.bench.report_ticks import tick_section
-from clik.bench.stats import ratio
+from benchmarks.cells import fmt
+from benchmarks.report_ticks import tick_section
+from benchmarks.stats import ratio
 
 
 def header(report: dict[str, Any]) -> list[str]:

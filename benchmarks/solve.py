@@ -2,7 +2,7 @@
 
 The targets are the hand's poses at seeded random configurations inside the
 joint limits; every solver starts from the reference configuration and is
-checked independently of any (:mod:`clik.bench.pose_error`). clik's compiled
+checked independently of any (:mod:`benchmarks.pose_error`). clik's compiled
 engine, its Python engine and pink take turns block by block (:data:`BLOCK`
 targets each; which goes first rotates too): drift in the machine's load
 reaches all three alike, and each solver runs a block with its own code and data
@@ -20,16 +20,16 @@ import numpy as np
 import pinocchio as pin
 
 import clik
-from clik.bench.config import BenchConfig, Log
-from clik.bench.pink_backend import Pink
-from clik.bench.pose_error import (
+from benchmarks.config import BenchConfig, Log
+from benchmarks.pink_backend import Pink
+from benchmarks.pose_error import (
     ORIENTATION_TOLERANCE,
     POSITION_TOLERANCE,
     pose_errors,
     within_tolerance,
 )
-from clik.bench.solve_pink import PinkSolve, pink_setup_text, pink_solver
-from clik.bench.stats import ratio, stats
+from benchmarks.solve_pink import PinkSolve, pink_setup_text, pink_solver
+from benchmarks.stats import ratio, stats
 from clik.model.robot import PANDA_FINGERS
 
 Engine = Literal["compiled", "python"]

@@ -1,7 +1,7 @@
 """The whole suite: run every measurement, write ``bench.json`` and ``bench.md``.
 
 :func:`run_bench` is what ``clik bench`` calls; :func:`main` is
-``python -m clik.bench``.
+``python -m benchmarks``.
 """
 
 from __future__ import annotations
@@ -14,22 +14,22 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from clik.bench.case_study import bench_case_study
-from clik.bench.config import FULL, QUICK, BenchConfig, Log
-from clik.bench.machine import cpu_seconds, machine_info, versions
-from clik.bench.memory import bench_memory
-from clik.bench.mink_backend import Mink, find_mink
-from clik.bench.pink_backend import Pink, find_pink
-from clik.bench.report import markdown
-from clik.bench.session_memory import bench_session
-from clik.bench.solve import bench_solve
-from clik.bench.stats import ratio
-from clik.bench.step import bench_steps
-from clik.bench.step_lines import line_name
-from clik.bench.step_zoo import bench_zoo
-from clik.bench.sweep_rate import bench_sweep
-from clik.bench.targets import evaluate_targets, load_targets
-from clik.bench.tick import TICK_LINES, bench_ticks
+from benchmarks.case_study import bench_case_study
+from benchmarks.config import FULL, QUICK, BenchConfig, Log
+from benchmarks.machine import cpu_seconds, machine_info, versions
+from benchmarks.memory import bench_memory
+from benchmarks.mink_backend import Mink, find_mink
+from benchmarks.pink_backend import Pink, find_pink
+from benchmarks.report import markdown
+from benchmarks.session_memory import bench_session
+from benchmarks.solve import bench_solve
+from benchmarks.stats import ratio
+from benchmarks.step import bench_steps
+from benchmarks.step_lines import line_name
+from benchmarks.step_zoo import bench_zoo
+from benchmarks.sweep_rate import bench_sweep
+from benchmarks.targets import evaluate_targets, load_targets
+from benchmarks.tick import TICK_LINES, bench_ticks
 from clik.outputs.io import atomic_write, check_out_path, output_errors, write_json
 
 REQUIRED_KEYS = (
@@ -87,7 +87,7 @@ STEP_US = {
 }
 """``bench.json``'s ``step_us`` keys and the step line whose median each is: clik's
 compiled engine, its Python engine's twins (``python_`` keys) and pink. The key
-``zoo_obstacle_median`` is added beside them (:func:`~clik.bench.step_zoo.bench_zoo`)."""
+``zoo_obstacle_median`` is added beside them (:func:`~benchmarks.step_zoo.bench_zoo`)."""
 
 
 @dataclass(frozen=True)
@@ -95,15 +95,15 @@ class Measured:
     """What each measurement returned.
 
     Attributes:
-        steps: Per step line (:func:`~clik.bench.step.bench_steps`).
-        solve: Single-pose solve (:func:`~clik.bench.solve.bench_solve`).
-        case: Case study (:func:`~clik.bench.case_study.bench_case_study`).
-        memory: Memory (:func:`~clik.bench.memory.bench_memory`).
-        sweep: Sweep (:func:`~clik.bench.sweep_rate.bench_sweep`).
-        zoo: The zoo's obstacle run (:func:`~clik.bench.step_zoo.bench_zoo`).
-        ticks: Per tick line (:func:`~clik.bench.tick.bench_ticks`).
+        steps: Per step line (:func:`~benchmarks.step.bench_steps`).
+        solve: Single-pose solve (:func:`~benchmarks.solve.bench_solve`).
+        case: Case study (:func:`~benchmarks.case_study.bench_case_study`).
+        memory: Memory (:func:`~benchmarks.memory.bench_memory`).
+        sweep: Sweep (:func:`~benchmarks.sweep_rate.bench_sweep`).
+        zoo: The zoo's obstacle run (:func:`~benchmarks.step_zoo.bench_zoo`).
+        ticks: Per tick line (:func:`~benchmarks.tick.bench_ticks`).
         session: A long controller session's memory
-            (:func:`~clik.bench.session_memory.bench_session`).
+            (:func:`~benchmarks.session_memory.bench_session`).
     """
 
     steps: dict[str, Any]
@@ -182,7 +182,7 @@ def tick_figures(m: Measured) -> dict[str, Any]:
 
     Returns:
         ``tick_us`` and ``tick_quality`` (every line of
-        :data:`~clik.bench.tick.TICK_LINES`, None when its library is missing),
+        :data:`~benchmarks.tick.TICK_LINES`, None when its library is missing),
         ``tick_error_m.panda_pose`` (clik's position error at its last tick [m]),
         ``ticks`` (each line's statistics and info) and ``tick_ratios`` (pink's and
         mink's medians over clik's).
@@ -256,7 +256,7 @@ def run_bench(
 
     Args:
         out: Output folder (created if missing).
-        quick: Smoke settings (:data:`~clik.bench.config.QUICK`): the same report
+        quick: Smoke settings (:data:`~benchmarks.config.QUICK`): the same report
             structure in a few seconds.
         log: Called with one line per stage (e.g. ``print``); default silent.
         targets: Targets file; default the shipped ``targets.toml``.
@@ -315,14 +315,17 @@ def run_bench(
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    """``python -m clik.bench --out DIR [--quick]``: run the suite, print ``bench.md``.
+    """``python -m benchmarks --out DIR [--quick] [--quiet]``: run the suite, print ``bench.md``.
+
+    The same as ``clik bench``, run from the checkout's root.
 
     Args:
         argv: Command-line arguments; default ``sys.argv[1:]``.
     """
-    parser = argparse.ArgumentParser(prog="python -m clik.bench")
-    parser.add_argument("--out", type=Path, default=Path("out/bench"))
-    parser.add_argument("--quick", action="store_true")
+    parser = argparse.ArgumentParser(prog="python -m benchmarks")
+    parser.add_argument("--out", type=Path, default=Path("out/bench"), help="output folder")
+    parser.add_argument("--quick", action="store_true", help="a smoke run of a few seconds")
+    parser.add_argument("--quiet", action="store_true", help="no progress lines")
     args = parser.parse_args(argv)
-    run_bench(args.out, quick=args.quick, log=print)
+    run_bench(args.out, quick=args.quick, log=None if args.quiet else print)
     print((args.out / "bench.md").read_text())

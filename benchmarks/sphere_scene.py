@@ -1,7 +1,7 @@
 """The Panda lines' three spheres as a Pinocchio geometry model, built apart from clik's scene.
 
-pink's collision barrier (:mod:`clik.bench.pink_barrier`) and the tick lines'
-clearance check (:mod:`clik.bench.tick_quality`) both need the spheres beside the
+pink's collision barrier (:mod:`benchmarks.pink_barrier`) and the tick lines'
+clearance check (:mod:`benchmarks.tick_quality`) both need the spheres beside the
 robot's link geometry. This builds that geometry model from the robot's URDF
 collision model and coal alone, not from clik's constraint code: every link
 geometry as a convex shape (a mesh replaced by its convex hull, as clik and MuJoCo

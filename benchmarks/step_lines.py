@@ -11,12 +11,12 @@ from dataclasses import dataclass
 import numpy as np
 
 import clik
-from clik.bench.config import DT, BenchConfig
-from clik.bench.pink_backend import Pink
-from clik.bench.pink_barrier import pink_obstacles
-from clik.bench.step_dual_arm import dual_arm_variants
-from clik.bench.step_pink import pink_step_variant
-from clik.bench.step_variant import Variant, clik_variant
+from benchmarks.config import DT, BenchConfig
+from benchmarks.pink_backend import Pink
+from benchmarks.pink_barrier import pink_obstacles
+from benchmarks.step_dual_arm import dual_arm_variants
+from benchmarks.step_pink import pink_step_variant
+from benchmarks.step_variant import Variant, clik_variant
 from clik.constraints import ConstraintSet, JointLimits, Obstacle
 from clik.loop.laws import LawName
 from clik.scenarios import scenario_path
@@ -253,7 +253,7 @@ def pink_variants(pink: Pink, panda: PandaSetup) -> list[Variant]:
     """The Panda lines of pink: configuration limits, its default limits, and the spheres.
 
     The third is the first with its collision barrier on :data:`OBSTACLES_ONE_ACTIVE`
-    (:mod:`clik.bench.pink_barrier`).
+    (:mod:`benchmarks.pink_barrier`).
 
     Args:
         pink: The installed pink and its QP solver.

@@ -1,19 +1,19 @@
 """pink's per-tick lines: one ``solve_ik`` + ``integrate_inplace`` per tick, as its examples run.
 
-The same pink setting as the step lines (:mod:`clik.bench.step_pink`), given each
+The same pink setting as the step lines (:mod:`benchmarks.step_pink`), given each
 tick the look-ahead target ``x_d(t_k+1)``: pink's (and mink's) examples set the
 target, then solve for the next configuration; ``x_d(t_k)`` would add one tick of
 lag to its tracking error. With the spheres, its collision barrier
-(:mod:`clik.bench.pink_barrier`).
+(:mod:`benchmarks.pink_barrier`).
 """
 
 from __future__ import annotations
 
-from clik.bench.pink_backend import Pink
-from clik.bench.pink_barrier import pink_obstacles
-from clik.bench.step_lines import OBSTACLE_RADIUS, OBSTACLES_ONE_ACTIVE, PandaSetup
-from clik.bench.step_pink import pink_setup_text, pink_tracking
-from clik.bench.tick_variant import TickVariant
+from benchmarks.pink_backend import Pink
+from benchmarks.pink_barrier import pink_obstacles
+from benchmarks.step_lines import OBSTACLE_RADIUS, OBSTACLES_ONE_ACTIVE, PandaSetup
+from benchmarks.step_pink import pink_setup_text, pink_tracking
+from benchmarks.tick_variant import TickVariant
 
 LOOK_AHEAD = "each tick given x_d(t_k+1)"
 
@@ -25,7 +25,7 @@ def pink_tick_variant(pink: Pink, panda: PandaSetup, obstacles: bool) -> TickVar
         pink: The installed pink and its QP solver.
         panda: The Panda setup.
         obstacles: Whether to add the barrier on
-            :data:`~clik.bench.step_lines.OBSTACLES_ONE_ACTIVE`.
+            :data:`~benchmarks.step_lines.OBSTACLES_ONE_ACTIVE`.
     """
     barrier = (
         pink_obstacles(panda.robot, OBSTACLES_ONE_ACTIVE, OBSTACLE_RADIUS) if obstacles else None

@@ -3,7 +3,7 @@
 pink (``FrameTask`` + ``PostureTask``, ``ConfigurationLimit`` or its default
 limits, ``solve_ik`` + ``integrate_inplace``) tracks the same reference from the
 same start on the same model as clik's Panda lines, one QP per sample; with the
-spheres, its collision barrier too (:mod:`clik.bench.pink_barrier`).
+spheres, its collision barrier too (:mod:`benchmarks.pink_barrier`).
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ import numpy as np
 import pinocchio as pin
 
 import clik
-from clik.bench.config import DT
-from clik.bench.pink_backend import PINK_DAMPING, Pink
-from clik.bench.pink_barrier import PinkObstacles
-from clik.bench.pose_error import pose_errors
-from clik.bench.step_variant import RunOutcome, Variant
+from benchmarks.config import DT
+from benchmarks.pink_backend import PINK_DAMPING, Pink
+from benchmarks.pink_barrier import PinkObstacles
+from benchmarks.pose_error import pose_errors
+from benchmarks.step_variant import RunOutcome, Variant
 from clik.trajectory import Trajectory
 
 PINK_POSTURE_COST = 1e-3
@@ -29,7 +29,7 @@ PINK_POSTURE_COST = 1e-3
 
 
 def reference_poses(trajectory: Trajectory) -> list[pin.SE3]:
-    """The trajectory's desired poses, one per sample at :data:`~clik.bench.config.DT`.
+    """The trajectory's desired poses, one per sample at :data:`~benchmarks.config.DT`.
 
     Args:
         trajectory: A pose reference (position and rotation).

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from clik.bench.config import BenchConfig, Log
+from benchmarks.config import BenchConfig, Log
 from clik.errors import InputError
 
 BENCH_SWEEP = """\

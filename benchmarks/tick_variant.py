@@ -1,10 +1,10 @@
 """One per-tick line: a tool stepped once per 1 ms tick from Python, its joints recorded.
 
-A tick line is a step-benchmark :class:`~clik.bench.step_variant.Variant` (its run
+A tick line is a step-benchmark :class:`~benchmarks.step_variant.Variant` (its run
 returns the ticks, the wall time of the whole per-tick loop and an info dict, so
-:func:`~clik.bench.step.interleaved_rounds` times it beside the others) that also
+:func:`~benchmarks.step.interleaved_rounds` times it beside the others) that also
 keeps the joints of its last run, ``q_0, q_1, ...``, for the tracking-quality check
-(:mod:`clik.bench.tick_quality`), made on the joints alone.
+(:mod:`benchmarks.tick_quality`), made on the joints alone.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from clik.bench.config import DT
-from clik.bench.step_variant import Variant
+from benchmarks.config import DT
+from benchmarks.step_variant import Variant
 from clik.trajectory import Trajectory, time_grid
 
 
@@ -47,7 +47,7 @@ class TickReference:
 
 
 def tick_reference(trajectory: Trajectory) -> TickReference:
-    """The trajectory at every tick of :data:`~clik.bench.config.DT`, as a user would hold it.
+    """The trajectory at every tick of :data:`~benchmarks.config.DT`, as a user would hold it.
 
     Args:
         trajectory: A pose reference (position and rotation).

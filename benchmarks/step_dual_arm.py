@@ -19,10 +19,10 @@ import numpy as np
 import pinocchio as pin
 
 import clik
-from clik.bench.config import DT, BenchConfig
-from clik.bench.pink_backend import PINK_DAMPING, Pink
-from clik.bench.pose_error import pose_errors
-from clik.bench.step_variant import RunOutcome, Variant
+from benchmarks.config import DT, BenchConfig
+from benchmarks.pink_backend import PINK_DAMPING, Pink
+from benchmarks.pose_error import pose_errors
+from benchmarks.step_variant import RunOutcome, Variant
 from clik.trajectory import Hold, JointPath, Line, PoseTrajectory, time_grid
 
 HANDS = ("left_hand_link", "right_hand_link")

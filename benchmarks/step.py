@@ -10,11 +10,11 @@ import gc
 from collections.abc import Sequence
 from typing import Any
 
-from clik.bench.config import BenchConfig, Log
-from clik.bench.pink_backend import Pink
-from clik.bench.stats import line_timing
-from clik.bench.step_lines import step_variants
-from clik.bench.step_variant import Variant
+from benchmarks.config import BenchConfig, Log
+from benchmarks.pink_backend import Pink
+from benchmarks.stats import line_timing
+from benchmarks.step_lines import step_variants
+from benchmarks.step_variant import Variant
 
 
 def interleaved_rounds(
@@ -56,7 +56,7 @@ def bench_steps(config: BenchConfig, pink: Pink | None, log: Log) -> dict[str, A
         log: Progress callback.
 
     Returns:
-        Per line (in the order of :func:`~clik.bench.step_lines.step_variants`): its
+        Per line (in the order of :func:`~benchmarks.step_lines.step_variants`): its
         description, median, p10, p90 and min [us], runs, steps per run, real-time
         factor and the info of its last run.
     """
