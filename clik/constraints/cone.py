@@ -39,6 +39,8 @@ from clik.constraints.kind import (
     Violation,
     read_gain,
 )
+from clik.constraints.region import Region, Surface
+from clik.constraints.words import AS_IS, DEGREES, LimitWords
 from clik.errors import InputError
 from clik.schema import MAX_LENGTH, Table
 
@@ -52,6 +54,12 @@ PARALLEL_SINE = 1e-12
 is then taken normal to ``a`` and the world axis least along it."""
 DEFAULT_THRESHOLD = math.radians(5.0)
 """Default ``d_c`` [rad]."""
+DRAWN_LENGTH = 0.25
+"""Length [m] of a drawn cone, apex to base."""
+MAX_DRAWN_ANGLE = math.radians(80.0)
+"""A wider cone is drawn at this half-angle (its base would be huge)."""
+DRAWN_SEGMENTS = 32
+"""Triangles around a drawn cone."""
 
 
 def _unit(value: Any, field: str) -> np.ndarray:
@@ -99,6 +107,9 @@ class Cone(ConstraintKind):
     name = "cone"
     table = "cone"
     """The scenario table: ``[[constraints.cone]]``."""
+    depth_measure = AS_IS
+    limit_words = LimitWords("crossed by {}", DEGREES)
+    """The surface crossed: by how far [rad], in deg."""
 
     def __init__(
         self,
@@ -166,6 +177,28 @@ class Cone(ConstraintKind):
         table.done()
         return out
 
+    @classmethod
+    def check_name(cls, key: str) -> str:
+        """``cone:upright`` -> ``cone 'upright'``."""
+        return f"cone {key.partition(':')[2]!r}"
+
+    @classmethod
+    def region(cls, spec: dict[str, Any]) -> Region:
+        """The cone's surface, :data:`DRAWN_LENGTH` long, its apex on the frame's origin."""
+        u = np.asarray(spec["direction"], float)
+        u = u / np.linalg.norm(u)
+        angle = min(float(spec["angle"]), MAX_DRAWN_ANGLE)
+        _, n = angle_and_normal(u, u)  # a unit vector normal to u
+        m = np.cross(u, n)
+        phi = np.linspace(0.0, 2.0 * math.pi, DRAWN_SEGMENTS, endpoint=False)
+        radius = DRAWN_LENGTH * math.tan(angle)
+        rim = DRAWN_LENGTH * u + radius * (np.outer(np.cos(phi), n) + np.outer(np.sin(phi), m))
+        vertices = np.vstack([np.zeros(3), rim])  # the apex, then the base's rim
+        k = np.arange(DRAWN_SEGMENTS)
+        triangles = np.stack([np.zeros_like(k), 1 + k, 1 + (k + 1) % DRAWN_SEGMENTS], axis=1)
+        surface = Surface("cone", vertices, triangles, smooth=True)
+        return Region((surface,), follows=str(spec["frame"]))
+
     def __repr__(self) -> str:
         return (
             f"Cone({self.frame!r}, axis={self.axis.tolist()}, "
@@ -192,7 +225,7 @@ class Cone(ConstraintKind):
     def finish(
         self, result: TrackingResult, records: dict[str, Any], n_rec: int, extra: dict[str, Any]
     ) -> None:
-        """The cone as ``cone_used`` and as a region of the 3-D view (``info["shapes"]``)."""
+        """The cone as ``cone_used`` and as a region of the view (:meth:`region` draws it)."""
         extra.setdefault("cone_used", []).append(
             {
                 "name": self.label, "frame": self.frame, "axis": self.axis.tolist(),
@@ -220,7 +253,7 @@ class Cone(ConstraintKind):
             f"{self.frame} axis at {math.degrees(theta):.4g} deg from the direction, cone "
             f"{math.degrees(self.angle):.4g} deg (threshold {math.degrees(self.threshold):.4g} deg)"
         )
-        return [Violation(f"cone {self.label!r}", detail, error)]
+        return [Violation(self.check_name(self.key), detail, error)]
 
     def with_margin(self, margin: float) -> Cone:
         """The threshold ``margin`` larger (solve mode)."""

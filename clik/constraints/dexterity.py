@@ -44,6 +44,7 @@ from clik.constraints.kind import (
     Sample,
     Violation,
 )
+from clik.constraints.words import AS_IS
 from clik.errors import InputError
 from clik.tasks.manipulability import manipulability
 
@@ -70,6 +71,10 @@ class Dexterity(ConstraintKind):
     """
 
     name = "dexterity"
+    depth_measure = AS_IS
+    """A depth in manipulability [m^p]."""
+    limit_words = None
+    """No limit: below the threshold is allowed (the row pushes back), and nothing crosses."""
 
     def __init__(self, threshold: float, gain: float | None = None) -> None:
         try:
@@ -82,6 +87,11 @@ class Dexterity(ConstraintKind):
             )
         self.threshold = value
         self.gain = gain
+
+    @classmethod
+    def check_name(cls, key: str) -> str:
+        """``dexterity`` (its one row's key and its check's name)."""
+        return key
 
     def __repr__(self) -> str:
         return f"Dexterity(threshold={self.threshold!r})"
@@ -122,7 +132,7 @@ class Dexterity(ConstraintKind):
         if error <= CHECK_TOLERANCE * self.threshold:
             return []
         detail = f"manipulability w = {w:.4g} < threshold {self.threshold:.4g}"
-        return [Violation("dexterity", detail, error)]
+        return [Violation(self.check_name(DEXTERITY_KEY), detail, error)]
 
     def with_margin(self, margin: float) -> Dexterity:
         """The threshold ``margin`` larger (solve mode)."""

@@ -37,6 +37,7 @@ from clik.constraints.kind import (
     Violation,
 )
 from clik.constraints.read_only import ReadOnlyList
+from clik.constraints.words import AS_IS, CROSSED
 from clik.errors import InputError, JointNotFound
 from clik.model.joints import CONTINUOUS, PRISMATIC, REVOLUTE, joint_kind
 
@@ -214,6 +215,13 @@ class JointLimits(ConstraintKind):
     name = "joint"
     covers_robot_limits = True
     """Its rows for solve mode also keep the other joints inside the robot's limits."""
+    depth_measure, limit_words = AS_IS, CROSSED
+    """Depths and excursions [rad or m] as they are (a key does not say which)."""
+
+    @classmethod
+    def check_name(cls, key: str) -> str:
+        """``joint:panda_joint2:lower`` -> ``joint range of panda_joint2``."""
+        return f"joint range of {key.partition(':')[2].rpartition(':')[0]}"
 
     def _check_usable(self, thr: np.ndarray, model: Any, prismatic: bool) -> None:
         """Refuse a threshold at least as wide as the widest (URDF) range of its kind.
@@ -352,7 +360,8 @@ class JointLimits(ConstraintKind):
                     f"{name} = {qi[k]:.6g} {unit}, {where} its {side} limit {limit:.6g} {unit} "
                     f"(threshold {thr:.4g} {unit})"
                 )
-                out.append(Violation(f"joint range of {name}", detail, float(thr - d)))
+                key = f"joint:{name}:{side}"
+                out.append(Violation(self.check_name(key), detail, float(thr - d)))
         return out
 
     def with_margin(self, margin: float) -> JointLimits:

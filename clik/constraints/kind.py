@@ -14,9 +14,15 @@ events, the active rows' record, and it never names a kind. A kind owns:
   (:meth:`KindRun.row`), the limits it guards (:meth:`KindRun.observe_limits`),
   what it records (:meth:`KindRun.record`, :meth:`KindRun.records`);
 - its summary fields (:meth:`ConstraintKind.finish`, from the records of either
-  engine) and its check of a single pose (:meth:`ConstraintKind.check`, solve mode).
+  engine) and its check of a single pose (:meth:`ConstraintKind.check`, solve mode);
+- its words: the keys it owns (:meth:`ConstraintKind.owns`, ``<name>:...``), the pose
+  check's name of a key (:meth:`ConstraintKind.check_name`), how its depths and its
+  crossed limits read (:attr:`ConstraintKind.depth_measure`,
+  :attr:`ConstraintKind.limit_words`), and how the 3-D view draws a region it reports
+  (:meth:`ConstraintKind.region`).
 
-A new kind is one subclass of each, registered in :mod:`clik.constraints.registry`.
+A new kind is one subclass of each, registered in :mod:`clik.constraints.registry`;
+``tests/constraints/test_kind_protocol.py`` fails while any part is missing.
 """
 
 from __future__ import annotations
@@ -30,6 +36,8 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol, TypeVar
 import numpy as np
 
 from clik.bounds import in_range, real
+from clik.constraints.region import Region
+from clik.constraints.words import AS_IS, LimitWords, Measure
 from clik.errors import InputError
 from clik.schema import MAX_GAIN_DT, Table
 
@@ -252,7 +260,15 @@ class ConstraintKind(ABC):
     """A kind of constraint row: its settings, gain and everything particular to it.
 
     Attributes:
-        name: The kind's name (``"joint"``, ``"obstacle"``, ...).
+        name: The kind's name (``"joint"``, ``"obstacle"``, ...), which begins each of its
+            keys: rows' keys ``<name>:...`` (or ``<name>`` alone), regions' names.
+        depth_measure: How its errors read (a depth inside a threshold, in a recovery
+            record's clause): :data:`~clik.constraints.words.MILLIMETRES` for lengths,
+            else :data:`~clik.constraints.words.AS_IS`.
+        limit_words: How a crossed limit of its constraints reads in a reason (a violation
+            record's words), or None: it guards no limit. Every kind states both itself
+            (``tests/constraints/test_kind_protocol.py`` asks); the defaults here only keep
+            a run's words readable meanwhile.
         table: Its scenario table, ``[[constraints.<table>]]`` (an array: one entry per
             constraint), or None for the kinds with their own ``[constraints.*]`` table.
         gain: The rows' gain [1/s]; None: the law's default (see
@@ -263,6 +279,8 @@ class ConstraintKind(ABC):
     """
 
     name: ClassVar[str]
+    depth_measure: ClassVar[Measure] = AS_IS
+    limit_words: ClassVar[LimitWords | None] = None
     table: ClassVar[str | None] = None
     per_sample: ClassVar[tuple[str, ...]] = ()
     _gain: float | None = None
@@ -275,6 +293,34 @@ class ConstraintKind(ABC):
     @gain.setter
     def gain(self, value: float | None) -> None:
         self._gain = checked_gain(value, f"{type(self).__name__}.gain")
+
+    @classmethod
+    def owns(cls, key: str) -> bool:
+        """Whether ``key`` (a row's key, a region's name) is this kind's: ``<name>[:...]``."""
+        return key.partition(":")[0] == cls.name
+
+    @classmethod
+    @abstractmethod
+    def check_name(cls, key: str) -> str:
+        """The name its pose check (:meth:`check`) gives the constraint of row ``key``.
+
+        ``obstacle:ball:link4`` -> ``obstacle 'ball'``: the :attr:`Violation.constraint`
+        a recovery record measures its row's depth by.
+        """
+
+    @classmethod
+    def region(cls, spec: dict[str, Any]) -> Region:
+        """How the 3-D view draws a region :meth:`finish` put in ``info["shapes"]``.
+
+        Only kinds that report regions define it.
+
+        Raises:
+            NotImplementedError: The kind reports no region.
+        """
+        raise NotImplementedError(
+            f"{cls.__name__} reports a region in info['shapes'] ({spec.get('name')!r}) "
+            f"but does not say how it is drawn: define {cls.__name__}.region(spec)"
+        )
 
     @classmethod
     def read_table(cls, table: Table, dt: float) -> dict[str, Any]:

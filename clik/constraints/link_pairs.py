@@ -27,6 +27,7 @@ from clik.constraints.kind import (
     Violation,
 )
 from clik.constraints.obstacle_rows import obstacle_row, point_jacobian
+from clik.constraints.words import MILLIMETRES, PENETRATED
 
 if TYPE_CHECKING:
     from clik.constraints.violations import ViolationMonitor
@@ -45,10 +46,18 @@ class LinkPairs(ConstraintKind):
     """
 
     name = "self"
+    depth_measure = MILLIMETRES
+    limit_words = PENETRATED
+    """Two links in contact: how deep [m], in mm."""
 
     def __init__(self, threshold: float = 0.01, gain: float | None = None) -> None:
         self.threshold = float(threshold)
         self.gain = gain
+
+    @classmethod
+    def check_name(cls, key: str) -> str:
+        """``self:link1:link5`` -> ``link pair link1-link5``."""
+        return "link pair " + key.partition(":")[2].replace(":", "-", 1)
 
     @property
     def wants_rows(self) -> bool:
@@ -77,9 +86,8 @@ class LinkPairs(ConstraintKind):
             d = float(results[pair].min_distance)
             if self.threshold - d > CHECK_TOLERANCE:
                 detail = f"{d:.4g} m apart < threshold {self.threshold:.4g} m"
-                out.append(
-                    Violation(f"link pair {labels[a]}-{labels[b]}", detail, self.threshold - d)
-                )
+                name = self.check_name(f"self:{labels[a]}:{labels[b]}")
+                out.append(Violation(name, detail, self.threshold - d))
         return out
 
     def with_margin(self, margin: float) -> LinkPairs:

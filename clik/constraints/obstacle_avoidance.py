@@ -39,6 +39,7 @@ from clik.constraints.kind import (
 from clik.constraints.obstacle import Obstacle
 from clik.constraints.obstacle_rows import FORMS, obstacle_error, obstacle_row, point_jacobian
 from clik.constraints.read_only import ReadOnlyList
+from clik.constraints.words import MILLIMETRES, PENETRATED
 from clik.errors import InputError
 
 if TYPE_CHECKING:
@@ -60,6 +61,9 @@ class ObstacleAvoidance(ConstraintKind):
 
     name = "obstacle"
     per_sample = ("obstacle_distance", "obstacle_link")
+    depth_measure = MILLIMETRES
+    limit_words = PENETRATED
+    """A link in an obstacle: how deep [m], in mm."""
 
     def __init__(
         self,
@@ -93,6 +97,11 @@ class ObstacleAvoidance(ConstraintKind):
         self.velocities = np.array([o.velocity for o in self.obstacles]).reshape(-1, 3)
         """``cdot`` per obstacle (n_obs, 3) [m/s]."""
         self.thresholds.flags.writeable = self.velocities.flags.writeable = False
+
+    @classmethod
+    def check_name(cls, key: str) -> str:
+        """``obstacle:ball:link4`` -> ``obstacle 'ball'`` (the check takes its nearest link)."""
+        return f"obstacle {key.partition(':')[2].rpartition(':')[0]!r}"
 
     @property
     def wants_rows(self) -> bool:
@@ -185,8 +194,10 @@ class ObstacleAvoidance(ConstraintKind):
             i = int(np.argmin(column))
             d = float(column[i])
             if thr - d > CHECK_TOLERANCE or not math.isfinite(d):
-                detail = f"link {scene.link_labels[i]} at {d:.4g} m < threshold {thr:.4g} m"
-                out.append(Violation(f"obstacle {obstacle.name!r}", detail, thr - d))
+                link = scene.link_labels[i]
+                detail = f"link {link} at {d:.4g} m < threshold {thr:.4g} m"
+                name = self.check_name(f"obstacle:{obstacle.name}:{link}")
+                out.append(Violation(name, detail, thr - d))
         return out
 
     def with_margin(self, margin: float) -> ObstacleAvoidance:

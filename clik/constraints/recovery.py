@@ -28,6 +28,8 @@ import numpy as np
 
 from clik.constraints.kind import Violation
 from clik.constraints.pose_check import PoseCheck
+from clik.constraints.registry import kind_of
+from clik.constraints.words import AS_IS
 
 if TYPE_CHECKING:
     from clik.constraints.constraint_set import ConstraintSet
@@ -42,19 +44,14 @@ STARTED = ("activate", "skipped")
 
 
 def check_name(key: str) -> str:
-    """The pose check's name of a row key (``obstacle:ball:link4`` -> ``obstacle 'ball'``)."""
-    kind, _, rest = key.partition(":")
-    if kind == "obstacle":
-        return f"obstacle {rest.rpartition(':')[0]!r}"
-    if kind == "joint":
-        return f"joint range of {rest.rpartition(':')[0]}"
-    if kind == "self":
-        return "link pair " + rest.replace(":", "-", 1)
-    if kind == "cone":
-        return f"cone {rest!r}"
-    if kind == "workspace":
-        return f"workspace {rest.rsplit(':', 2)[0]!r}"
-    return key
+    """The pose check's name of a row key, as the kind that owns the key names it.
+
+    ``obstacle:ball:link4`` -> ``obstacle 'ball'``
+    (:meth:`~clik.constraints.kind.ConstraintKind.check_name`); a key no registered kind
+    owns is its own name.
+    """
+    kind = kind_of(key)
+    return key if kind is None else kind.check_name(key)
 
 
 def _started_inside(result: TrackingResult) -> list[str]:
@@ -131,14 +128,15 @@ def recovery_records(
 
 
 def recovery_clause(records: list[dict[str, Any]]) -> str:
-    """``"; started inside the threshold of X (depth 8.8 mm), recovered in 0.031 s"``."""
+    """``"; started inside the threshold of X (depth 8.8 mm), recovered in 0.031 s"``.
+
+    Each depth is written as the kind that owns its key says
+    (:attr:`~clik.constraints.kind.ConstraintKind.depth_measure`: mm for lengths).
+    """
     out = ""
     for r in records:
-        depth = (
-            f"depth {r['depth'] * 1e3:.3g} mm"
-            if r["constraint"].startswith(("obstacle:", "self:", "workspace:"))
-            else f"depth {r['depth']:.4g}"
-        )
+        kind = kind_of(r["constraint"])
+        depth = f"depth {(AS_IS if kind is None else kind.depth_measure).format(r['depth'])}"
         how = (
             f"recovered in {r['duration']:.3g} s"
             if r["recovered"]

@@ -9,17 +9,23 @@ and last crossed and the worst excursion:
 ``{"constraint", "t_first", "t_last", "worst"}``, ``worst`` being the deepest
 penetration [m] or the largest excursion past the limit [rad or m].
 
+A record reads as the kind that owns its key says
+(:attr:`~clik.constraints.kind.ConstraintKind.limit_words`: "penetrated 3.2 mm deep",
+"crossed by 12 deg"), found by the key
+(:func:`clik.constraints.registry.limit_words`, given to the monitor by the loop).
+
 A run that would be ``completed`` but has violations ends ``violated``.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
+from clik.constraints.words import LimitWords
 from clik.model.robot import Robot
 
 JOINT_TOLERANCE = 1e-9
@@ -27,14 +33,30 @@ JOINT_TOLERANCE = 1e-9
 
 
 class ViolationRecord:
-    """First and last time a constraint's limit was crossed, and the worst excursion."""
+    """First and last time a constraint's limit was crossed, and the worst excursion.
 
-    __slots__ = ("constraint", "kind", "t_first", "t_last", "worst")
+    Args:
+        constraint: The constraint's key.
+        kind: What the engine measured: ``"joint"``, ``"obstacle"`` (a penetration),
+            ``"length"`` or ``"angle"`` (both engines' records carry it).
+        t: The time it was first crossed [s].
+        worst: The excursion then [m or rad].
+        words: How it reads: the words of the kind that owns ``constraint``.
+    """
 
-    def __init__(self, constraint: str, kind: str, t: float, worst: float) -> None:
+    __slots__ = ("constraint", "kind", "t_first", "t_last", "words", "worst")
+
+    def __init__(
+        self, constraint: str, kind: str, t: float, worst: float, words: LimitWords
+    ) -> None:
         self.constraint, self.kind = constraint, kind
         self.t_first = self.t_last = t
         self.worst = worst
+        self.words = words
+
+    def rank(self) -> tuple[bool, float]:
+        """Which record is the worst: a penetration before any excursion, then the larger."""
+        return (self.words.penetration, self.worst)
 
     def as_dict(self) -> dict[str, Any]:
         """The record as ``{"constraint", "t_first", "t_last", "worst"}``."""
@@ -52,13 +74,7 @@ class ViolationRecord:
             if self.t_first == self.t_last
             else f"from t = {self.t_first:.6g} to {self.t_last:.6g} s"
         )
-        if self.kind == "joint":
-            return f"{self.constraint} crossed by {self.worst:.4g} {when}"
-        if self.kind == "length":
-            return f"{self.constraint} crossed by {self.worst * 1000:.3g} mm {when}"
-        if self.kind == "angle":
-            return f"{self.constraint} crossed by {math.degrees(self.worst):.3g} deg {when}"
-        return f"{self.constraint} penetrated {self.worst * 1000:.3g} mm deep {when}"
+        return f"{self.words.describe(self.constraint, self.worst)} {when}"
 
 
 class JointRange:
@@ -100,10 +116,13 @@ class ViolationMonitor:
 
     Args:
         joints: The joint limits to stay in.
+        words: The words of a constraint's key
+            (:func:`clik.constraints.registry.limit_words`).
     """
 
-    def __init__(self, joints: JointRange) -> None:
+    def __init__(self, joints: JointRange, words: Callable[[str], LimitWords]) -> None:
         self.joints = joints
+        self.words = words
         self.records: dict[str, ViolationRecord] = {}
         self.notes = 0
         """Limits crossed so far, counted at every sample (a controller's ``violated``)."""
@@ -133,7 +152,8 @@ class ViolationMonitor:
     def observe_excursion(self, t: float, key: str, kind: str, excess: float) -> None:
         """Record a limit crossed by ``excess`` > 0 [m or rad] (a wall, a cone's surface).
 
-        ``kind`` says the unit: ``"length"`` [m] or ``"angle"`` [rad].
+        ``kind`` is what was measured, ``"length"`` [m] or ``"angle"`` [rad], kept in the
+        record as the compiled engine keeps it; the record's words are its key's kind's.
         """
         self._note(key, kind, t, excess)
 
@@ -141,7 +161,7 @@ class ViolationMonitor:
         self.notes += 1
         rec = self.records.get(key)
         if rec is None:
-            self.records[key] = ViolationRecord(key, kind, t, float(excess))
+            self.records[key] = ViolationRecord(key, kind, t, float(excess), self.words(key))
             return
         rec.t_last = t
         rec.worst = max(rec.worst, float(excess))
@@ -154,4 +174,4 @@ class ViolationMonitor:
         """The deepest penetration if any, else the largest excursion."""
         if not self.records:
             return None
-        return max(self.records.values(), key=lambda r: (r.kind == "obstacle", r.worst))
+        return max(self.records.values(), key=ViolationRecord.rank)

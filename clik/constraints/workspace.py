@@ -35,6 +35,8 @@ from clik.constraints.kind import (
     read_gain,
 )
 from clik.constraints.read_only import ReadOnlyList
+from clik.constraints.region import Lines, Region, Surface, box_edges, box_surface
+from clik.constraints.words import MILLIMETRES, LimitWords
 from clik.errors import InputError
 from clik.schema import MAX_LENGTH, Table
 
@@ -82,6 +84,9 @@ class Workspace(ConstraintKind):
     name = "workspace"
     table = "workspace"
     """The scenario table: ``[[constraints.workspace]]``."""
+    depth_measure = MILLIMETRES
+    limit_words = LimitWords("crossed by {}", MILLIMETRES)
+    """A wall crossed: by how far [m], in mm."""
 
     def __init__(
         self,
@@ -151,6 +156,24 @@ class Workspace(ConstraintKind):
         table.done()
         return out
 
+    @classmethod
+    def check_name(cls, key: str) -> str:
+        """``workspace:cell:x:upper`` -> ``workspace 'cell'``."""
+        return f"workspace {key.partition(':')[2].rsplit(':', 2)[0]!r}"
+
+    @classmethod
+    def region(cls, spec: dict[str, Any]) -> Region:
+        """The box's walls (translucent) and edges, and the inner box of its threshold."""
+        lower, upper = np.asarray(spec["lower"], float), np.asarray(spec["upper"], float)
+        parts: list[Surface | Lines] = [
+            Surface("walls", *box_surface(lower, upper)),
+            Lines("edges", box_edges(lower, upper)),
+        ]
+        thr = float(spec.get("threshold") or 0.0)
+        if thr > 0.0 and np.all(upper - lower > 2 * thr):
+            parts.append(Lines("threshold", box_edges(lower + thr, upper - thr)))
+        return Region(tuple(parts))
+
     def __repr__(self) -> str:
         return (
             f"Workspace({self.frame!r}, lower={self.lower.tolist()}, "
@@ -177,7 +200,7 @@ class Workspace(ConstraintKind):
     def finish(
         self, result: TrackingResult, records: dict[str, Any], n_rec: int, extra: dict[str, Any]
     ) -> None:
-        """The box as ``workspace_used`` and as a region of the 3-D view (``info["shapes"]``)."""
+        """The box as ``workspace_used`` and as a region of the view (:meth:`region` draws it)."""
         extra.setdefault("workspace_used", []).append(
             {
                 "name": self.label, "frame": self.frame, "lower": self.lower.tolist(),
@@ -204,7 +227,7 @@ class Workspace(ConstraintKind):
                     f"{self.frame} at {axis} = {p[i % 3]:.6g} m, {d:.4g} m from the {side} "
                     f"wall {axis} = {wall:.6g} m (threshold {self.threshold:.4g} m)"
                 )
-                out.append(Violation(f"workspace {self.label!r}", detail, self.threshold - d))
+                out.append(Violation(self.check_name(self.keys[i]), detail, self.threshold - d))
         return out
 
     def with_margin(self, margin: float) -> Workspace:

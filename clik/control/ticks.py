@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clik.constraints.registry import limit_words
 from clik.constraints.violations import ViolationRecord
 from clik.control.targets import TickTargets
 from clik.control.tick import Tick
@@ -177,7 +178,7 @@ class PythonTicks:
 
 
 def _record(constraint: str, kind: str, t_first: float, t_last: float, worst: float) -> Any:
-    record = ViolationRecord(constraint, kind, t_first, worst)
+    record = ViolationRecord(constraint, kind, t_first, worst, limit_words(constraint))
     record.t_last = t_last
     return record
 
@@ -186,7 +187,7 @@ def violated_reason(crossed: list[ViolationRecord]) -> str:
     """The ``violated`` verdict's reason: the worst limit crossed at this tick."""
     if not crossed:
         return "a limit was crossed"
-    worst = max(crossed, key=lambda r: (r.kind == "obstacle", r.worst))
+    worst = max(crossed, key=ViolationRecord.rank)
     more = f" ({len(crossed)} limits in all)" if len(crossed) > 1 else ""
     return f"a limit was crossed: {worst.describe()}{more}"
 

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from clik.constraints.constraint_run import finish_constraints
+from clik.constraints.registry import limit_words
 from clik.constraints.violations import ViolationRecord
 from clik.engine import load
 from clik.loop.stop_checks import instability_reason, joint_step_reason, non_finite_reason
@@ -107,7 +108,7 @@ def synced(run: RunState, native: Any) -> None:
     run.rec.j = native.kept
     run.checks.worst_margin = native.worst_margin
     for constraint, kind, t_first, t_last, worst in native.violations:
-        record = ViolationRecord(constraint, kind, t_first, worst)
+        record = ViolationRecord(constraint, kind, t_first, worst, limit_words(constraint))
         record.t_last = t_last
         run.monitor.records[constraint] = record
     if run.cset is not None:

@@ -27,6 +27,7 @@ import pinocchio as pin
 
 from clik.constraints.constraint_run import ConstraintRun
 from clik.constraints.recovery import recovery_clause, recovery_records
+from clik.constraints.registry import limit_words
 from clik.constraints.violations import JointRange, ViolationMonitor
 from clik.loop.compiled_run import compiled_samples
 from clik.loop.goal_rows import task_errors
@@ -142,7 +143,8 @@ class _Run:
         self.speed_step: SpeedStep | None = None  # the compiled engine's is in C++
         if tracker.speed is not None and python:
             self.speed_step = SpeedStep(tracker.speed, self.dt)
-        self.monitor = ViolationMonitor(_joint_range(robot, cset))
+        joints = JointRange(robot, None if cset is None else cset.joint_ranges())  # the robot's,
+        self.monitor = ViolationMonitor(joints, limit_words)  # tightened by a joint-range kind
         self.checks = StopChecks(settings, tracker.law, self.dt)
         self.e6 = np.zeros(6)
         self.steps, self.max_err, self.err, self.err_rot, self.r = 0, 0.0, 0.0, 0.0, 0
@@ -490,11 +492,6 @@ class _Run:
             f"; in conflict with: {', '.join(names)}; active constraints: "
             f"{', '.join(self.crun.active_names())}"
         )
-
-
-def _joint_range(robot: Robot, cset: ConstraintSet | None) -> JointRange:
-    """The robot's limits, tightened by the joint-range constraint's where it has one."""
-    return JointRange(robot, None if cset is None else cset.joint_ranges())
 
 
 LWA = pin.LOCAL_WORLD_ALIGNED

@@ -8,7 +8,7 @@ self-contained HTML file (:func:`clik.viz.export_html`). Scene tree:
 - ``/meshcat/paths/reference`` and ``/meshcat/paths/trail/<k>``: the task frame's paths;
 - ``/meshcat/tasks/<name>/...``: a several-task run's other tasks, when the scene is
   given the run's goals (:mod:`clik.viz.task_layer`);
-- ``/meshcat/regions/<name>``: workspace boxes and tool cones (:mod:`clik.viz.shape_layer`);
+- ``/meshcat/regions/<name>``: the regions the kinds report (:mod:`clik.viz.shape_layer`);
 - ``/meshcat/witness/...``: witness segments of the obstacle rows;
 
 then one animation (real time, ``fps`` frames per second, looping) and the

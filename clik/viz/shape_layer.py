@@ -1,26 +1,30 @@
-"""Regions the constraint kinds keep a frame in: boxes and cones, drawn translucent.
+"""Regions the constraint kinds keep a frame in, drawn translucent.
 
-A kind describes its region in ``result.info["shapes"]`` (see
-:meth:`clik.constraints.kind.ConstraintKind.finish`), one dict per region, and this
-layer draws each by its ``shape``, never by its kind:
+A kind describes each of its regions in ``result.info["shapes"]`` (its
+:meth:`~clik.constraints.kind.ConstraintKind.finish`, one dict per region, its ``name``
+a key of the kind) and says how it is drawn
+(:meth:`~clik.constraints.kind.ConstraintKind.region`): surfaces and lines
+(:mod:`clik.constraints.region`), in the world or following a frame's origin. This layer
+finds the kind by the region's name (:func:`clik.constraints.registry.kind_of`) and draws
+what it says, never naming a kind or a shape:
 
-- ``"box"``: ``lower``, ``upper`` [m] (world frame): the walls, translucent, and their
-  edges; ``threshold`` [m]: the inner box where the rows switch on, as edges.
-- ``"cone"``: ``frame`` (its apex follows the frame's origin along the animation),
-  ``direction`` (world), ``angle`` [rad]: a cone of :data:`CONE_LENGTH`.
+- a :class:`~clik.constraints.region.Surface`: a translucent mesh, both sides;
+- :class:`~clik.constraints.region.Lines`: line segments;
+- a region that follows a frame: its node at the frame's origin, animated along the run.
 
-Nodes: ``/meshcat/regions/<name>``.
+Nodes: ``/meshcat/regions/<name>/<part>``. A region of a kind this clik does not know, or
+following a frame the robot lacks, is not drawn.
 """
 
 from __future__ import annotations
 
-import math
-from itertools import product
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
+from clik.constraints.region import Part, Region, Surface
+from clik.constraints.registry import kind_of
 from clik.model.robot import Robot
 from clik.viz import palette
 from clik.viz.commands import (
@@ -34,16 +38,12 @@ from clik.viz.commands import (
     set_transform,
     track,
 )
-from clik.viz.geometry import box
+from clik.viz.geometry import mesh
 from clik.viz.robot_layer import node_name
 from clik.viz.timeline import Timeline
 
 ROOT = "/meshcat/regions"
 """Scene path of the regions."""
-CONE_LENGTH = 0.25
-"""Length [m] of a drawn cone, apex to base."""
-MAX_DRAWN_ANGLE = math.radians(80.0)
-"""A wider cone is drawn at this half-angle (its base would be huge)."""
 
 
 def region_path(spec: dict[str, Any]) -> str:
@@ -51,74 +51,28 @@ def region_path(spec: dict[str, Any]) -> str:
     return f"{ROOT}/{node_name(str(spec['name']))}"
 
 
-def _edges(lower: np.ndarray, upper: np.ndarray) -> dict[str, Any]:
-    """The 12 edges of a box as a line-segment geometry."""
-    corners = [np.where(np.array(bits), upper, lower) for bits in product((0, 1), repeat=3)]
-    pairs = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]
-    points = np.array([corners[i] for pair in pairs for i in pair], dtype=float)
-    return {
-        "uuid": new_uuid(),
-        "type": "BufferGeometry",
-        "data": {"attributes": {"position": buffer_attribute(points)}},
-    }
+def drawn_region(spec: dict[str, Any]) -> Region | None:
+    """What the kind that owns the region ``spec`` draws of it, or None: no such kind."""
+    kind = kind_of(str(spec.get("name", "")))
+    return None if kind is None else kind.region(spec)
 
 
-def _box_commands(spec: dict[str, Any]) -> list[Command]:
-    path = region_path(spec)
-    lower, upper = np.asarray(spec["lower"], float), np.asarray(spec["upper"], float)
-    walls = box(upper - lower)
-    centre = np.eye(4)
-    centre[:3, 3] = 0.5 * (lower + upper)
-    material = phong_material(palette.REGION, opacity=palette.REGION_OPACITY, double_sided=True)
-    commands = [
-        set_object(
-            f"{path}/walls",
-            scene_object("Mesh", walls.geometry, material, centre, str(spec["name"])),
-        ),
-        set_object(
-            f"{path}/edges",
-            scene_object("LineSegments", _edges(lower, upper), line_material(palette.REGION)),
-        ),
-    ]
-    thr = float(spec.get("threshold") or 0.0)
-    if thr > 0.0 and np.all(upper - lower > 2 * thr):
-        inner = _edges(lower + thr, upper - thr)
-        commands.append(
-            set_object(
-                f"{path}/threshold",
-                scene_object("LineSegments", inner, line_material(palette.REGION)),
-            )
+def part_command(path: str, part: Part, label: str = "") -> Command:
+    """The command drawing one part of a region at ``<path>/<part.name>``."""
+    if isinstance(part, Surface):
+        shape = mesh(part.vertices, part.triangles, flat=not part.smooth)
+        material = phong_material(
+            palette.REGION, opacity=palette.REGION_OPACITY, flat=shape.is_mesh, double_sided=True
         )
-    return commands
-
-
-def _cone_commands(spec: dict[str, Any], apex: np.ndarray) -> list[Command]:
-    """A cone opening along ``direction`` from its apex (three.js cones lie along y)."""
-    path = region_path(spec)
-    angle = min(float(spec["angle"]), MAX_DRAWN_ANGLE)
-    geometry = {
-        "uuid": new_uuid(),
-        "type": "ConeGeometry",
-        "radius": CONE_LENGTH * math.tan(angle),
-        "height": CONE_LENGTH,
-        "radialSegments": 32,
-        "openEnded": True,
-    }
-    u = np.asarray(spec["direction"], float)
-    u = u / np.linalg.norm(u)
-    along = np.eye(4)  # apex (+y/2 in three.js) to the origin, opening along -y, then -y -> u
-    along[:3, 3] = [0.0, -0.5 * CONE_LENGTH, 0.0]
-    turn = np.eye(4)
-    turn[:3, :3] = pin.Quaternion.FromTwoVectors(np.array([0.0, -1.0, 0.0]), u).matrix()
-    material = phong_material(palette.REGION, opacity=palette.REGION_OPACITY, double_sided=True)
-    at = np.eye(4)
-    at[:3, 3] = apex
-    return [
-        set_object(
-            f"{path}/cone", scene_object("Mesh", geometry, material, turn @ along, spec["name"])
-        ),
-        set_transform(path, at),
-    ]
+        obj = scene_object("Mesh", shape.geometry, material, shape.matrix, label)
+    else:
+        geometry = {
+            "uuid": new_uuid(),
+            "type": "BufferGeometry",
+            "data": {"attributes": {"position": buffer_attribute(part.points)}},
+        }
+        obj = scene_object("LineSegments", geometry, line_material(palette.REGION))
+    return set_object(f"{path}/{part.name}", obj)
 
 
 def frame_origins(robot: Robot, frame: str, q: np.ndarray) -> np.ndarray:
@@ -147,11 +101,19 @@ def region_layer(
     commands: list[Command] = []
     clips: dict[str, list[dict[str, Any]]] = {}
     for spec in shapes:
-        if spec.get("shape") == "box":
-            commands += _box_commands(spec)
-        elif spec.get("shape") == "cone" and robot.model.existFrame(str(spec.get("frame"))):
-            apex = frame_origins(robot, str(spec["frame"]), q)
-            commands += _cone_commands(spec, apex[0])
+        region = drawn_region(spec)
+        if region is None:
+            continue
+        frame = region.follows
+        if frame is not None and not robot.model.existFrame(frame):
+            continue
+        path = region_path(spec)
+        commands += [part_command(path, part, str(spec["name"])) for part in region.parts]
+        if frame is not None:
+            origin = frame_origins(robot, frame, q)
+            at = np.eye(4)
+            at[:3, 3] = origin[0]
+            commands.append(set_transform(path, at))
             if len(timeline) > 1:
-                clips[region_path(spec)] = [track(".position", "vector3", timeline.times, apex)]
+                clips[path] = [track(".position", "vector3", timeline.times, origin)]
     return commands, clips

@@ -197,6 +197,35 @@ class TestScene:
         assert tracks["/meshcat/regions/cone:cup"] == [".position"]
         assert "/meshcat/regions/workspace:table" not in tracks
 
+    def test_regions_are_drawn_where_the_kinds_say(self):
+        """The box's walls are its faces (its area) and its edges its 12 sides; the cone's
+        rim is at its half-angle from the direction, its apex on the frame's origin."""
+        from clik.constraints.cone import DRAWN_LENGTH, Cone
+        from clik.constraints.region import Lines, Surface
+        from clik.constraints.workspace import Workspace
+
+        lower, upper = np.array([-0.1, 0.0, 0.2]), np.array([0.3, 0.5, 0.4])
+        box = Workspace.region({"name": "workspace:b", "lower": lower, "upper": upper,
+                                "threshold": 0.05})  # fmt: skip
+        walls, edges, inner = box.parts
+        assert isinstance(walls, Surface) and isinstance(edges, Lines) and box.follows is None
+        a, b, c = (walls.vertices[walls.triangles[:, i]] for i in range(3))
+        area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum()
+        x, y, z = upper - lower
+        assert area == pytest.approx(2 * (x * y + y * z + z * x))
+        sides = np.linalg.norm(edges.points[1::2] - edges.points[::2], axis=1)
+        assert sorted(sides) == pytest.approx(sorted([x, y, z] * 4))
+        assert inner.name == "threshold" and inner.points.min(axis=0) == pytest.approx(lower + 0.05)
+        u = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
+        cone = Cone.region({"name": "cone:c", "frame": "tip", "direction": u.tolist(),
+                            "angle": 0.4})  # fmt: skip
+        (surface,) = cone.parts
+        assert cone.follows == "tip" and surface.smooth
+        np.testing.assert_allclose(surface.vertices[0], 0.0)
+        rim = surface.vertices[1:]
+        np.testing.assert_allclose(rim @ u, DRAWN_LENGTH)
+        np.testing.assert_allclose(np.arccos(rim @ u / np.linalg.norm(rim, axis=1)), 0.4)
+
     def test_timeline_is_real_time_and_ends_on_the_last_sample(self):
         t = np.arange(3001) * 1e-3
         timeline = Timeline.from_times(t, 30)
