@@ -18,10 +18,13 @@ from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
 
 from clik import trajectory
+from clik.constraints.collision_scene import NoCollisionGeometryWarning, SkippedGeometryWarning
+from clik.constraints.joint_thresholds import ThresholdCapWarning
 from clik.control import Controller, Tick
 from clik.engine import check_installed
 from clik.errors import (
     ClikError,
+    ClikWarning,
     EngineError,
     ExportError,
     FrameNotFound,
@@ -37,12 +40,15 @@ from clik.errors import (
     UnknownRobotError,
 )
 from clik.loop.joint_speed import JointSpeed, SpeedLimitWarning
+from clik.loop.start_checks import StartWarning
 from clik.loop.tracker import ReachWarning, StabilityWarning, Tracker, track
 from clik.model.loading import ReferenceClippedWarning
 from clik.model.mimic import MimicJointWarning
+from clik.model.mjcf_root import FreeJointWeldedWarning
 from clik.model.robot import Robot
 from clik.model.srdf import SrdfWarning
 from clik.model.visual_meshes import MissingVisualMeshWarning
+from clik.model.xacro_expand import XacroWarning
 from clik.objectives.objective import Objective
 from clik.outputs.result import TrackingResult
 from clik.solving.solve_mode import solve
@@ -57,11 +63,13 @@ from clik.tasks.task import Task
 
 __all__ = [
     "ClikError",
+    "ClikWarning",
     "ComTask",
     "Controller",
     "EngineError",
     "ExportError",
     "FrameNotFound",
+    "FreeJointWeldedWarning",
     "GeometryError",
     "Goal",
     "InfeasibleError",
@@ -70,6 +78,7 @@ __all__ = [
     "JointSpeed",
     "MimicJointWarning",
     "MissingVisualMeshWarning",
+    "NoCollisionGeometryWarning",
     "Objective",
     "OutputError",
     "OutputExistsError",
@@ -81,16 +90,20 @@ __all__ = [
     "Robot",
     "RobotLoadError",
     "ScenarioError",
+    "SkippedGeometryWarning",
     "SolveResult",
     "SpeedLimitWarning",
     "SpeedLimits",
     "SrdfWarning",
     "StabilityWarning",
+    "StartWarning",
     "Task",
+    "ThresholdCapWarning",
     "Tick",
     "Tracker",
     "TrackingResult",
     "UnknownRobotError",
+    "XacroWarning",
     "plot",
     "solve",
     "track",

@@ -1,10 +1,15 @@
-"""The one exception hierarchy of clik.
+"""The one exception hierarchy of clik, and the root of its warnings.
 
 Every error clik raises on bad input is a :class:`ClikError` subclass. Each
 subclass keeps the data it was built from as attributes and builds its message
 from them, so a caller can either show the message or react to the fields.
 
 The command line maps each family to an exit code (see :data:`EXIT_CODES`).
+
+Every warning clik emits is a :class:`ClikWarning` subclass, defined beside the code
+that emits it (``ReachWarning`` in :mod:`clik.loop.tracker`, ...) and exported by
+``clik``; ``warnings.filterwarnings("error", category=clik.ClikWarning)`` escalates
+them all, ``"ignore"`` silences them all.
 """
 
 from __future__ import annotations
@@ -78,6 +83,15 @@ class ClikError(Exception):
     """Root of every error clik raises on purpose."""
 
     exit_code: int = 2
+
+
+class ClikWarning(UserWarning):
+    """Root of every warning clik emits: a legal input that will likely not do what was meant.
+
+    A :class:`UserWarning`, so Python shows it once per place by default. Filter on it to
+    treat every clik warning alike (``warnings.filterwarnings("error",
+    category=clik.ClikWarning)``), or on a subclass for one kind.
+    """
 
 
 class InputError(ClikError, ValueError):

@@ -32,7 +32,7 @@ import pinocchio as pin
 
 from clik.constraints.obstacle import Obstacle, convex_hull
 from clik.constraints.read_only import ReadOnlyList
-from clik.errors import GeometryError, InputError
+from clik.errors import ClikWarning, GeometryError, InputError
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
@@ -48,11 +48,11 @@ _CHANGE_SCENE = "a new ConstraintSet (its obstacles: ConstraintSet.set_obstacles
 """How to change a scene's link geometry."""
 
 
-class NoCollisionGeometryWarning(UserWarning):
+class NoCollisionGeometryWarning(ClikWarning):
     """Some links have no collision geometry: they cannot be kept away from obstacles."""
 
 
-class SkippedGeometryWarning(UserWarning):
+class SkippedGeometryWarning(ClikWarning):
     """A link geometry has no usable convex hull: it is left out, the others are checked."""
 
 

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from clik.errors import InputError, user_stacklevel
+from clik.errors import ClikWarning, InputError, user_stacklevel
 from clik.model.joints import PRISMATIC, REVOLUTE
 
 MAX_ANGLE_THRESHOLD = 2.0 * math.pi
@@ -25,7 +25,7 @@ LOOKS_LIKE_DEGREES = 1.0
 """A revolute threshold from this value [rad] (57 deg) on is probably written in degrees."""
 
 
-class ThresholdCapWarning(UserWarning):
+class ThresholdCapWarning(ClikWarning):
     """A joint-range threshold was capped at a quarter of its joint's range."""
 
 

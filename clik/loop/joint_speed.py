@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clik.errors import InputError, JointNotFound
+from clik.errors import ClikWarning, InputError, JointNotFound
 from clik.outputs.velocity_report import velocity_names
 
 if TYPE_CHECKING:
@@ -42,7 +42,7 @@ MAX_SPEED_BOUND = 1e4
 """Largest velocity or acceleration bound accepted [rad/s, m/s, rad/s^2 or m/s^2]."""
 
 
-class SpeedLimitWarning(UserWarning):
+class SpeedLimitWarning(ClikWarning):
     """A joint has no velocity limit in its URDF: the law keeps it within ``default_velocity``."""
 
 

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from clik.errors import user_stacklevel
+from clik.errors import ClikWarning, user_stacklevel
 from clik.model.joints import PRISMATIC, REVOLUTE, joint_kind
 
 if TYPE_CHECKING:
@@ -47,7 +47,7 @@ TRIAL_STEP = math.radians(20.0)
 """Size [rad] of the single-joint moves tried to leave a singular start (revolute joints)."""
 
 
-class StartWarning(UserWarning):
+class StartWarning(ClikWarning):
     """The start configuration is singular for the task, or on a joint limit."""
 
 

@@ -20,7 +20,7 @@ import numpy as np
 from clik.bounds import MAX_RECORD_BYTES, MAX_STEPS, in_range, real
 from clik.constraints.constraint_set import ConstraintSet
 from clik.engine import ENGINES
-from clik.errors import InputError
+from clik.errors import ClikWarning, InputError
 from clik.loop.gains import row_gains, stability_margin
 from clik.loop.joint_speed import JointSpeed, JointSpeedBounds
 from clik.loop.laws import LawName, check_law, nonlinear, prioritized, transpose
@@ -45,11 +45,11 @@ JOINT_SPEED = JointSpeed()
 """The default: the law keeps every joint within its URDF velocity limit."""
 
 
-class ReachWarning(UserWarning):
+class ReachWarning(ClikWarning):
     """The position reference leaves the frame's reach: the run will end in a deadlock."""
 
 
-class StabilityWarning(UserWarning):
+class StabilityWarning(ClikWarning):
     """The gains break ``alpha dt lambda_max(J J^T) < 2``: explicit Euler may go unstable."""
 
 

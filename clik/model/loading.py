@@ -18,7 +18,7 @@ import numpy as np
 import pinocchio as pin
 from lxml import etree
 
-from clik.errors import RobotLoadError, native_message, user_stacklevel
+from clik.errors import ClikWarning, RobotLoadError, native_message, user_stacklevel
 from clik.model.base import BASE_JOINT, root_joint
 from clik.model.joints import PRISMATIC, REVOLUTE, joint_kind
 from clik.model.mesh_check import vertex_problem
@@ -28,7 +28,7 @@ from clik.model.urdf_numbers import shown
 from clik.model.visual_meshes import MissingVisual
 
 
-class ReferenceClippedWarning(UserWarning):
+class ReferenceClippedWarning(ClikWarning):
     """The robot's own reference configuration lay outside its limits and was clipped.
 
     Attributes:

@@ -24,7 +24,7 @@ import numpy as np
 import pinocchio as pin
 from lxml import etree
 
-from clik.errors import RobotLoadError, user_stacklevel
+from clik.errors import ClikWarning, RobotLoadError, user_stacklevel
 from clik.model.joints import CONTINUOUS, PRISMATIC, joint_kind
 
 MAX_MIMIC = 1000.0
@@ -32,7 +32,7 @@ MAX_MIMIC = 1000.0
 then stays finite along any chain of mimics within the joint-count budget)."""
 
 
-class MimicJointWarning(UserWarning):
+class MimicJointWarning(ClikWarning):
     """Mimic joints were locked while their leader stays free (the follower does not follow).
 
     Attributes:

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from clik.errors import user_stacklevel
+from clik.errors import ClikWarning, user_stacklevel
 from clik.model.base import FIXED
 from clik.model.urdf_check import MAX_LINKS, MAX_MOVABLE_JOINTS
 from clik.model.urdf_numbers import Fail, shown
@@ -40,7 +40,7 @@ POSE_ATTRIBUTES = ("pos", "quat", "axisangle", "euler", "xyaxes", "zaxis")
 """A body's pose in its parent (MuJoCo allows one orientation attribute)."""
 
 
-class FreeJointWeldedWarning(UserWarning):
+class FreeJointWeldedWarning(ClikWarning):
     """With a fixed base, the root body's free joint was removed.
 
     The body is welded where the file places it; ``base="floating"`` keeps it free.

@@ -35,7 +35,7 @@ import numpy as np
 import pinocchio as pin
 from lxml import etree
 
-from clik.errors import InputError, RobotLoadError, shown, user_stacklevel
+from clik.errors import ClikWarning, InputError, RobotLoadError, shown, user_stacklevel
 from clik.model.base import planar_from_free_flyer
 from clik.model.joints import CONTINUOUS, PLANAR, joint_kind
 from clik.model.urdf_check import MAX_NAME_LENGTH, parse_xml
@@ -54,7 +54,7 @@ _LISTED = 20
 """Names listed in a warning before the rest is counted."""
 
 
-class SrdfWarning(UserWarning):
+class SrdfWarning(ClikWarning):
     """Names in an SRDF that the robot does not have: what they name is left out.
 
     Attributes:

@@ -27,7 +27,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from clik.errors import shown_path, user_stacklevel
+from clik.errors import ClikWarning, shown_path, user_stacklevel
 from clik.model.urdf_numbers import shown
 
 MISSING_MARK = "{urn:clik:visual-meshes}missing"
@@ -40,7 +40,7 @@ _LFS_POINTER_BYTES = 1024
 """Largest Git LFS pointer file [bytes] (they are about 130 bytes)."""
 
 
-class MissingVisualMeshWarning(UserWarning):
+class MissingVisualMeshWarning(ClikWarning):
     """A link's visual mesh is missing: the link is drawn with its collision geometry.
 
     Attributes:

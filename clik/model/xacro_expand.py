@@ -45,7 +45,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from clik.errors import SHOWN_CHARACTERS, ClikError, InputError, RobotLoadError, user_stacklevel
+from clik.errors import (
+    SHOWN_CHARACTERS,
+    ClikError,
+    ClikWarning,
+    InputError,
+    RobotLoadError,
+    user_stacklevel,
+)
 from clik.model.packages import MANIFEST, PackageDirs, package_dirs_of
 from clik.model.urdf_check import parse_xml
 
@@ -56,7 +63,7 @@ _LOCK = threading.Lock()
 """Xacro keeps its state in module globals: one expansion at a time per process."""
 
 
-class XacroWarning(UserWarning):
+class XacroWarning(ClikWarning):
     """Xacro printed a message (e.g. a redefined property) while expanding a file."""
 
 
