@@ -46,12 +46,12 @@ class SeveralTasks:
     def task(self) -> Task:
         """The primary task (a frame task in the world)."""
         task: Any = self.goals[self.primary].task
-        return task  # type: ignore[no-any-return]
+        return task
 
     @property
     def trajectory(self) -> Trajectory:
         """The primary task's trajectory."""
-        return self.goals[self.primary].trajectory  # type: ignore[no-any-return]
+        return self.goals[self.primary].trajectory
 
     @property
     def duration(self) -> float:

@@ -30,5 +30,3 @@ def gain_value(table: Table, name: str, dt: float, default: Any = None) -> Any:
             value,
         )
     return gains
-
-
