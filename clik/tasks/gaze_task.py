@@ -221,7 +221,7 @@ class GazeTask(BaseTask):
 
     def engine_goal(self, engine: Any) -> Any:
         """``_engine.GazeGoal``."""
-        return engine.GazeGoal(frame=int(self.frame_id), axis=[float(x) for x in self.axis])
+        return engine.GazeGoal(frame=int(self.frame_id), axis=np.array(self.axis, dtype=float))
 
     def tick_target(self) -> FrameTarget:
         """The point (3,) [m] (or a pose's position) and its velocity (3,) [m/s]."""

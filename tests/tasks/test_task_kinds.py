@@ -71,6 +71,11 @@ class Case:
     """Its tick targets in every form its reader takes, from one reference row."""
     velocity: Callable[[Any, int], Any]
     """Its tick velocity at sample ``k`` of its trajectory's samples."""
+    held: Callable[[np.ndarray], np.ndarray]
+    """Its reference row at a configuration: where it is there (its error zero)."""
+    exact: bool = True
+    """Its rows are its error's derivative everywhere (a frame's orientation rows only
+    where the error is zero: ``log3``'s derivative is the identity there)."""
 
 
 def panda() -> clik.Robot:
@@ -87,6 +92,11 @@ def linear(s: Any, k: int) -> np.ndarray:
 
 def twist(s: Any, k: int) -> np.ndarray:
     return np.concatenate([s.linear_velocity[k], s.angular_velocity[k]])
+
+
+def pose_row(placement: pin.SE3) -> np.ndarray:
+    """A pose's reference row: its position, then its rotation, row-major."""
+    return np.concatenate([placement.translation, placement.rotation.ravel()])
 
 
 def pose_forms(row: np.ndarray) -> list[Any]:
@@ -106,15 +116,18 @@ def case_of(kind: type[BaseTask]) -> Case:
     """The case of each kind (a kind without one fails the test below)."""
     robot = panda()
     if kind is clik.Task:
-        task: BaseTask = clik.Task(robot, "panda_link5", "pose")
+        task: BaseTask = clik.Task(robot, "panda_link4", "pose", ["x", "y", "rz"])
         start = task.placement(Q0)  # type: ignore[attr-defined]
-        line = Line(start.translation, start.translation + [0.0, 0.02, 0.01], 0.3)
+        line = Line(start.translation, start.translation + [0.0, 0.02, 0.0], 0.3)
         traj: Any = PoseTrajectory(line, Hold(rotation=start.rotation))
         table = (
-            'kind = "pose"\nframe = "panda_link5"\n[tasks.trajectory]\nkind = "hold"\n'
-            "duration = 0.3"
+            'kind = "pose"\nframe = "panda_link4"\naxes = ["x", "y", "rz"]\n'
+            '[tasks.trajectory]\nkind = "hold"\nduration = 0.3'
         )
-        return Case(task, traj, table, {"frame": 3, "axes": ["q"]}, pose_forms, twist)
+        return Case(
+            task, traj, table, {"frame": 3, "axes": ["q"]}, pose_forms, twist,
+            lambda q: pose_row(task.placement(q)), exact=False,  # type: ignore[attr-defined]
+        )  # fmt: skip
     if kind is RelativeTask:
         task = RelativeTask(robot, "panda_hand", "panda_link3", "position")
         start = task.placement(Q0)  # type: ignore[attr-defined]
@@ -123,7 +136,10 @@ def case_of(kind: type[BaseTask]) -> Case:
             'kind = "position"\nframe = "panda_hand"\nrelative_to = "panda_link3"\n'
             '[tasks.trajectory]\nkind = "hold"\nduration = 0.3'
         )
-        return Case(task, traj, table, {"relative_to": 1}, point_forms, linear)
+        return Case(
+            task, traj, table, {"relative_to": 1}, point_forms, linear,
+            lambda q: pose_row(task.placement(q)),  # type: ignore[attr-defined]
+        )  # fmt: skip
     if kind is PostureTask:
         task = PostureTask(robot, ["panda_joint1", "panda_joint7"])
         start_q = task.angles(Q0)  # type: ignore[attr-defined]
@@ -131,36 +147,41 @@ def case_of(kind: type[BaseTask]) -> Case:
         table = 'kind = "posture"\njoints = ["panda_joint1", "panda_joint7"]'
         return Case(
             task, traj, table, {"joints": "panda_joint1"}, lambda r: [r.copy(), r.tolist()],
-            lambda s, k: s.qdot[k],
+            lambda s, k: s.qdot[k], task.angles,  # type: ignore[attr-defined]
         )  # fmt: skip
     if kind is ComTask:
         task = ComTask(robot, ["x", "y"])
         c0 = task.position(Q0)  # type: ignore[attr-defined]
         traj = Line(c0, c0 + [0.01, 0.0, 0.0], 0.3)
         table = 'kind = "com"\naxes = ["x", "y"]'
-        return Case(task, traj, table, {"axes": ["w"]}, point_forms, linear)
+        return Case(
+            task,
+            traj,
+            table,
+            {"axes": ["w"]},
+            point_forms,
+            linear,
+            task.position,  # type: ignore[attr-defined]
+        )
     if kind is DistanceTask:
         task = DistanceTask(robot, "panda_hand", "panda_link3")
         d0 = task.distance(Q0)  # type: ignore[attr-defined]
         traj = JointPath([[d0], [d0 - 0.02]], duration=0.3)
-        table = (
-            'kind = "distance"\nframe = "panda_hand"\nrelative_to = "panda_link3"\n'
-            '[tasks.trajectory]\nkind = "line"\ngoal = 0.4\nduration = 0.3'
-        )
+        table = 'kind = "distance"\nframe = "panda_hand"\nrelative_to = "panda_link3"'
         return Case(
             task, traj, table, {"relative_to": 2, "frame": []},
             lambda r: [float(r[0]), r.copy(), np.float64(r[0]), [float(r[0])]],
-            lambda s, k: float(s.qdot[k, 0]),
+            lambda s, k: float(s.qdot[k, 0]), lambda q: np.array([task.distance(q)]),  # type: ignore[attr-defined]
         )  # fmt: skip
     if kind is GazeTask:
         task = GazeTask(robot, "panda_link7", [0.0, 1.0, 0.0])
         p0 = task.ahead(Q0, 0.5)  # type: ignore[attr-defined]
         traj = Line(p0, p0 + [0.05, 0.0, 0.0], 0.3)
-        table = (
-            'kind = "gaze"\nframe = "panda_link7"\naxis = [0.0, 1.0, 0.0]\n'
-            '[tasks.trajectory]\nkind = "line"\ngoal = [0.5, 0.2, 0.5]\nduration = 0.3'
-        )
-        return Case(task, traj, table, {"axis": [0, 0, 0], "frame": 1.0}, point_forms, linear)
+        table = 'kind = "gaze"\nframe = "panda_link7"\naxis = [0.0, 1.0, 0.0]'
+        return Case(
+            task, traj, table, {"axis": [0, 0, 0], "frame": 1.0}, point_forms, linear,
+            lambda q: task.ahead(q, 0.5),  # type: ignore[attr-defined]
+        )  # fmt: skip
     raise AssertionError(f"no case for {kind.__name__}: add one")
 
 
@@ -177,28 +198,39 @@ def rows_at(task: BaseTask, q: np.ndarray, ref: np.ndarray, ff: np.ndarray) -> t
     return J, e, x
 
 
+def fd_rows(task: BaseTask, q: np.ndarray, ref: np.ndarray, ff: np.ndarray) -> np.ndarray:
+    """``-de/dq`` by central differences at ``q`` (the error's own derivative)."""
+    model = task.robot.model
+    out = np.empty((task.m, model.nv))
+    for i in range(model.nv):
+        dq = np.zeros(model.nv)
+        dq[i] = STEP
+        ep = rows_at(task, pin.integrate(model, q, dq), ref, ff)[1]
+        em = rows_at(task, pin.integrate(model, q, -dq), ref, ff)[1]
+        out[:, i] = -(ep - em) / (2 * STEP)
+    return out
+
+
 @pytest.mark.parametrize("kind", TASK_KINDS, ids=KIND_IDS)
 def test_rows_are_the_error_s_derivative(kind: type[BaseTask]) -> None:
+    """At configurations where the task is on its reference (every kind), and anywhere
+    for a kind whose rows are exact (all but a frame's orientation rows)."""
     case = case_of(kind)
     task, model = case.task, case.task.robot.model
     ref_rows, ff_rows = task.reference_arrays(case.trajectory.sample(np.array([0.1, 0.1 + STEP])))
     rng = np.random.default_rng(3)
     for _ in range(5):
         q = pin.integrate(model, Q0, 0.3 * rng.standard_normal(model.nv))
-        J = rows_at(task, q, ref_rows[0], ff_rows[0])[0]
-        Jfd = np.empty_like(J)
-        for i in range(model.nv):
-            dq = np.zeros(model.nv)
-            dq[i] = STEP
-            ep = rows_at(task, pin.integrate(model, q, dq), ref_rows[0], ff_rows[0])[1]
-            em = rows_at(task, pin.integrate(model, q, -dq), ref_rows[0], ff_rows[0])[1]
-            Jfd[:, i] = -(ep - em) / (2 * STEP)
-        assert np.abs(J - Jfd).max() <= ROW_TOLERANCE * max(np.abs(J).max(), 1e-3)
+        refs = [case.held(q)] + ([ref_rows[0]] if case.exact else [])
+        for ref in refs:
+            J = rows_at(task, q, ref, ff_rows[0])[0]
+            assert np.abs(J - fd_rows(task, q, ref, ff_rows[0])).max() <= ROW_TOLERANCE * max(
+                np.abs(J).max(), 1e-3
+            )
     # the feed-forward: the error's change with the reference alone, at a fixed q
-    dt = STEP
     _, e0, x = rows_at(task, Q0, ref_rows[0], ff_rows[0])
     _, e1, _ = rows_at(task, Q0, ref_rows[1], ff_rows[1])
-    assert np.allclose(x, (e1 - e0) / dt, rtol=1e-4, atol=1e-6)
+    assert np.allclose(x, (e1 - e0) / STEP, rtol=1e-4, atol=1e-6)
 
 
 def goals(case: Case) -> list[clik.Goal]:
@@ -273,7 +305,9 @@ def test_each_key_of_its_table_is_refused_by_name(kind: type[BaseTask], tmp_path
         head = lines.index("[tasks.trajectory]") if "[tasks.trajectory]" in lines else len(lines)
         value = repr(bad).replace("'", '"').replace("True", "true")
         lines.insert(head, f"{key} = {value}")
-        text = scenario_text(Case(case.task, None, "\n".join(lines), {}, case.forms, linear))
+        text = scenario_text(
+            Case(case.task, None, "\n".join(lines), {}, case.forms, linear, case.held)
+        )
         path = tmp_path / f"bad_{key}.toml"
         path.write_text(text)
         with pytest.raises(ScenarioError, match=rf"tasks\[1\]\.{key}"):
