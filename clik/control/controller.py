@@ -258,10 +258,10 @@ class Controller:
                 calls in the same thread (one thread at a time).
         """
         if obstacles is None:
-            return self._tick(targets, velocities)  # type: ignore[no-any-return]
+            return self._tick(targets, velocities)
         with self._held("Controller.step"):
             self._move(obstacles)
-            return self._ticks.step(targets, velocities, True)  # type: ignore[no-any-return]
+            return self._ticks.step(targets, velocities, True)
 
     def _move(self, obstacles: Any) -> None:
         """:meth:`step`'s ``obstacles``: each moved, from this tick on (the turn held)."""

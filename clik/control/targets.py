@@ -103,20 +103,17 @@ class TickTargets:
     def _by_name(self, value: Any, field: str, every: bool) -> dict[Any, Any] | None:
         """A mapping of ``value`` (None: the one task's value itself), its keys checked."""
         n = len(self.names)
-        if isinstance(value, dict):
-            mapping: dict[Any, Any] | None = value
-        elif n == 1 and _plain(value):
+        if n == 1 and not isinstance(value, dict) and _plain(value):
             return None
-        else:
-            mapping = as_mapping(value, field, tuple(self.names))
-            if mapping is None:
-                if n == 1:
-                    return None
-                what = "target" if every else "velocity"
-                raise InputError(
-                    field, f"a mapping of task name to {what} ({', '.join(self.names)})", value
-                )
-        found = sum(1 for name in self.names if name in mapping)
+        mapping = value if isinstance(value, dict) else as_mapping(value, field, tuple(self.names))
+        if mapping is None:
+            if n == 1:
+                return None
+            what = "target" if every else "velocity"
+            raise InputError(
+                field, f"a mapping of task name to {what} ({', '.join(self.names)})", value
+            )
+        found = sum(name in mapping for name in self.names)
         if len(mapping) > found:
             unknown = next(key for key in mapping if key not in self.names)
             raise InputError(field, f"task names among {self.names!r}", unknown)
@@ -171,8 +168,8 @@ class TickTargets:
             try:
                 ref, ff = self.readers[i].read(target, velocity)
             except Refusal as why:
-                shown = velocity if why.velocity else target
-                got = shown[3].tolist() if why.show == "last_row" else shown.tolist()  # type: ignore[union-attr]
+                shown: Any = velocity if why.velocity else target
+                got = shown[3].tolist() if why.show == "last_row" else shown.tolist()
                 field = _field("velocities" if why.velocity else "targets", self.names[i])
                 raise InputError(field, why.expected, got) from None
             refs.append(ref)
