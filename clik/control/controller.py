@@ -261,7 +261,7 @@ class Controller:
             return self._tick(targets, velocities)
         with self._held("Controller.step"):
             self._move(obstacles)
-            return self._ticks.step(targets, velocities, True)
+            return self._ticks.step_held(targets, velocities)
 
     def _move(self, obstacles: Any) -> None:
         """:meth:`step`'s ``obstacles``: each moved, from this tick on (the turn held)."""

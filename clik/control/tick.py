@@ -19,8 +19,8 @@ class Tick(metaclass=ABCMeta):
 
     The compiled engine returns its own form, ``clik._engine.Tick``, with the same
     attributes (read-only); ``isinstance(tick, Tick)`` holds for both. A tick's arrays are
-    its own (the compiled engine's view the tick's own copy): keep them, write into them,
-    nothing else changes.
+    its own copies (the compiled engine's made when first read): keep them, write into
+    them, nothing else changes.
 
     Attributes:
         q: ``q_{k+1}``, the joints to command next (nq,) [rad or m]; ``q_k`` itself

@@ -116,17 +116,18 @@ class PythonTicks:
         """The next tick."""
         return self._next
 
-    def step(self, targets: Any, velocities: Any = None, held: bool = False) -> Tick:
-        """One tick (:meth:`clik.Controller.step`); ``held``: the caller holds the turn."""
-        if held:
-            assert self.turn.mine()
-        else:
-            self.turn.take("Controller.step")
+    def step(self, targets: Any, velocities: Any) -> Tick:
+        """One tick (:meth:`clik.Controller.step`), the controller's turn taken."""
+        self.turn.take("Controller.step")
         try:
             return self._step(targets, velocities)
         finally:
-            if not held:
-                self.turn.give()
+            self.turn.give()
+
+    def step_held(self, targets: Any, velocities: Any) -> Tick:
+        """:meth:`step` when the caller holds the turn (obstacles moved first)."""
+        assert self.turn.mine()
+        return self._step(targets, velocities)
 
     def _step(self, targets: Any, velocities: Any) -> Tick:
         staged = self.targets.stage(targets, velocities)  # may run the caller's code

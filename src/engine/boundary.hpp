@@ -19,6 +19,11 @@ namespace clik {
 inline void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument(message);
 }
+// The same for a fixed message: its std::string made only when thrown (no allocation on a
+// path that runs at every tick).
+inline void require(bool ok, const char* message) {
+  if (!ok) throw std::invalid_argument(message);
+}
 
 inline bool finite_positive(double x) { return std::isfinite(x) && x > 0.0; }
 inline bool finite_nonnegative(double x) { return std::isfinite(x) && x >= 0.0; }

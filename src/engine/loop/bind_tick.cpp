@@ -1,5 +1,6 @@
 // The tick a controller's step returns on the compiled engine (`_engine.Tick`, made by
 // loop/bind_ticker.cpp; see loop/py_tick.hpp): its attributes, read from its own copies.
+#include <algorithm>
 #include <string>
 
 #include <nanobind/nanobind.h>
@@ -14,19 +15,19 @@ namespace clik {
 
 namespace {
 
-// A tick's joints (joint velocities): an array viewing the tick's own copy (its base the
-// tick). A new array at each read (an array kept by the tick would be a reference cycle).
-nb::object view_of(nb::handle tick, const Small<double, 16>& values) {
-  npy_intp n = static_cast<npy_intp>(values.size());
-  PyObject* a = PyArray_New(&PyArray_Type, 1, &n, NPY_DOUBLE, nullptr,
-                            const_cast<double*>(values.data()), 0, NPY_ARRAY_CARRAY, nullptr);
-  if (a == nullptr) throw nb::python_error();
-  nb::object array = nb::steal(a);
-  Py_INCREF(tick.ptr());  // stolen by the array
-  if (PyArray_SetBaseObject(reinterpret_cast<PyArrayObject*>(a), tick.ptr()) < 0) {
-    throw nb::python_error();
+// A tick's joints (joint velocities): an array of its own, a copy of the tick's made when
+// first read and kept (the tick's other attributes are too). It does not refer back to the
+// tick: keeping `tick.q` keeps 8 bytes a joint, not the tick.
+nb::object array_of(const Joints& values, nb::object& kept) {
+  if (!kept.is_valid()) {
+    npy_intp n = static_cast<npy_intp>(values.size());
+    PyObject* a = PyArray_SimpleNew(1, &n, NPY_DOUBLE);
+    if (a == nullptr) throw nb::python_error();
+    std::copy(values.data(), values.data() + values.size(),
+              static_cast<double*>(PyArray_DATA(reinterpret_cast<PyArrayObject*>(a))));
+    kept = nb::steal(a);
   }
-  return array;
+  return kept;
 }
 
 // The active rows' names, or this tick's events, as Python lists (made when first read).
@@ -73,11 +74,12 @@ void bind_tick(nb::module_& m) {
   nb::class_<PyTick>(m, "Tick",
                      "One tick of a clik.Controller on the compiled engine: the attributes of "
                      "clik.control.tick.Tick (read-only; its own data, safe from any thread).")
-      .def_prop_ro("q", [](nb::handle s) { return view_of(s, nb::inst_ptr<PyTick>(s)->q); },
-                   "q_{k+1}, the joints to command next (nq,) [rad or m]: the tick's own.")
-      .def_prop_ro("qdot",
-                   [](nb::handle s) { return view_of(s, nb::inst_ptr<PyTick>(s)->qdot); },
-                   "qdot_k, the law's joint velocity (nv,) [rad/s or m/s]: the tick's own.")
+      .def_prop_ro("q", [](PyTick& s) { return array_of(s.q, s.q_array); },
+                   "q_{k+1}, the joints to command next (nq,) [rad or m]: the tick's own array "
+                   "(the same one at each read).")
+      .def_prop_ro("qdot", [](PyTick& s) { return array_of(s.qdot, s.qdot_array); },
+                   "qdot_k, the law's joint velocity (nv,) [rad/s or m/s]: the tick's own "
+                   "array (the same one at each read).")
       .def_ro("t", &PyTick::t, "This tick's time t_k [s].")
       .def_ro("k", &PyTick::k, "This tick's index.")
       .def_ro("code", &PyTick::code,

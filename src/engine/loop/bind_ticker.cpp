@@ -68,18 +68,17 @@ nb::object array_of(const double* v, long n) {
 }
 
 // ``shape (16,)`` as Python writes a shape.
-std::string shape_words(const std::vector<long>& shape) {
+std::string shape_words(const Floats& f) {
   std::string s = "shape (";
-  for (std::size_t i = 0; i < shape.size(); ++i) {
-    s += (i ? ", " : "") + std::to_string(shape[i]);
-  }
-  return s + (shape.size() == 1 ? ",)" : ")");
+  for (int i = 0; i < f.ndim; ++i) s += (i ? ", " : "") + std::to_string(f.shape[i]);
+  return s + (f.ndim == 1 ? ",)" : ")");
 }
 
-// The values of a 1-D or 2-D form as a Python list (of lists).
-nb::list values_list(const Floats& f) {
+// The values of a 0-, 1- or 2-D form as Python gives them (a number, a list of lists).
+nb::object values_of(const Floats& f) {
+  if (f.ndim == 0) return nb::float_(f.values[0]);
   nb::list out;
-  if (f.shape.size() == 1) {
+  if (f.ndim == 1) {
     for (long i = 0; i < f.shape[0]; ++i) out.append(f.values[static_cast<std::size_t>(i)]);
     return out;
   }
@@ -148,11 +147,12 @@ struct PyTicker {
     Floats& f = velocity ? targets->velocity(i) : targets->target(i);
     const npy_intp* dims = PyArray_DIMS(a);
     f.given = true;
-    f.shape.assign(dims, dims + PyArray_NDIM(a));
+    f.ndim = std::min(PyArray_NDIM(a), Floats::MAX_DIMS);
+    std::copy(dims, dims + f.ndim, f.shape);
     const TargetReader& reader = targets->reader(i);
     const long n = velocity ? velocity_size(reader, f) : target_size(reader, f);
     if (n < 0) {
-      const std::string got = shape_words(f.shape);
+      const std::string got = shape_words(f);
       raise(velocity ? velocity_fields[at] : fields[at],
             velocity ? velocity_words[at] : target_words[at], nb::str(got.c_str()));
     }
@@ -275,9 +275,10 @@ struct PyTicker {
     if (why.show == Refusal::Show::last_row) {  // a 4x4's last row
       std::vector<double> row(f.values.begin() + 12, f.values.begin() + 16);
       f.values = std::move(row);
-      f.shape = {4};
+      f.ndim = 1;
+      f.shape[0] = 4;
     }
-    raise(why.velocity ? velocity_fields[at] : fields[at], why.expected, values_list(f));
+    raise(why.velocity ? velocity_fields[at] : fields[at], why.expected, values_of(f));
   }
 
   nb::object step(nb::handle targets_in, nb::handle velocities_in, bool held) {
@@ -429,14 +430,22 @@ void bind_ticker(nb::module_& m) {
            "stop, above_since) -> the reason of a verdict other than ok.")
       .def(
           "step",
-          [](PyTicker& s, nb::handle targets, nb::handle velocities, bool held) {
+          [](PyTicker& s, nb::handle targets, nb::handle velocities) {
             require(s.run != nullptr, "Ticker.step: restart() first");
-            return s.step(targets, velocities, held);
+            return s.step(targets, velocities, false);
           },
-          nb::arg("targets").none(), nb::arg("velocities").none() = nb::none(),
-          nb::arg("held") = false,
-          "One tick (Controller.step): the targets and velocities as the controller takes "
-          "them; held: the caller holds the turn already (obstacles moved first).")
+          nb::arg("targets").none(), nb::arg("velocities").none(),
+          "One tick (Controller.step): the targets and velocities (None: none) as the "
+          "controller takes them.")
+      .def(
+          "step_held",
+          [](PyTicker& s, nb::handle targets, nb::handle velocities) {
+            require(s.run != nullptr, "Ticker.step_held: restart() first");
+            return s.step(targets, velocities, true);
+          },
+          nb::arg("targets").none(), nb::arg("velocities").none(),
+          "step_held(targets, velocities): step() when the caller holds the turn already "
+          "(obstacles moved first).")
       .def_prop_ro("k", [](const PyTicker& s) { return s.run ? s.run->next : 0L; },
                    "The next tick's index.")
       .def_prop_ro("q", [](const PyTicker& s) { return array_of(s.q.data(), s.q.size()); },

@@ -1,9 +1,8 @@
 // One tick of a controller as the compiled engine returns it (`_engine.Tick`, made in
 // loop/bind_ticker.cpp; its Python form is clik.control.tick.Tick). Everything a tick
 // holds is its own: its joints, events, active rows and errors are copied when the tick is
-// made; `tick.q` and `tick.qdot` are arrays viewing its own copies (their base the tick,
-// which they keep alive; memory the engine never writes), and the names it reads them by
-// are immutable tuples. So a tick may be read from any thread, at any time, whatever the
+// made; `tick.q` and `tick.qdot` are arrays of their own, copied from the tick's when first
+// read (the engine never writes them), and the names it reads them by are immutable tuples. So a tick may be read from any thread, at any time, whatever the
 // controller does meanwhile.
 #pragma once
 
@@ -41,18 +40,23 @@ class Small {
   std::size_t n_ = 0;
 };
 
-// Made in place in its Python object (loop/bind_ticker.cpp), never moved: its arrays view
-// its own values.
+// Joints of up to JOINTS_IN_PLACE values are kept in the tick itself (an arm's); a tick
+// stays under CPython's small-object size (512 bytes), allocated by its pool, not malloc.
+constexpr std::size_t JOINTS_IN_PLACE = 8;
+using Joints = Small<double, JOINTS_IN_PLACE>;
+
+// Made in place in its Python object (loop/bind_ticker.cpp).
 struct PyTick {
-  Small<double, 16> q, qdot;  // q_{k+1} (nq), qdot_k (nv)
+  Joints q, qdot;  // q_{k+1} (nq), qdot_k (nv)
   double t = 0.0;
   long k = 0;
   int code = 0;  // the verdict's: 0 ok, 1 deadlock, 2 violated, 3 diverged, 4 off_track
   nanobind::object verdict, reason;
   nanobind::object task_names, constraint_names;  // tuples: by task, by constraint key
   std::vector<Event> events;                       // this tick's
-  Small<int, 8> active;                            // the active rows' keys, in row order
-  Small<double, 8> errors;                         // (first, second) per task
+  Small<int, 6> active;                            // the active rows' keys, in row order
+  Small<double, 4> errors;                         // (first, second) per task
+  nanobind::object q_array, qdot_array;            // copies of q, qdot made when first read
   nanobind::object events_list, active_list;       // made when first read
 };
 

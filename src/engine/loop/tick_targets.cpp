@@ -23,8 +23,6 @@ TickTargets::TickTargets(const TrackingRun& run)
     Floats t, v;
     t.values.assign(static_cast<std::size_t>(largest_target(r)), 0.0);
     v.values.assign(static_cast<std::size_t>(largest_velocity(r)), 0.0);
-    t.shape.reserve(4);
-    v.shape.reserve(4);
     targets_.push_back(std::move(t));
     velocities_.push_back(std::move(v));
   }

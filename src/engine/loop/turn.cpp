@@ -9,27 +9,28 @@ namespace clik {
 
 bool Turn::claim() {
   bool free = false;
-  return busy_.compare_exchange_strong(free, true);
+  return busy_.compare_exchange_strong(free, true, std::memory_order_acquire,
+                                       std::memory_order_relaxed);
 }
 
 void Turn::take(const char* who) {
   const unsigned long me = PyThread_get_thread_ident();
   if (claim()) {  // free: taken at once (with the GIL held: no other Python thread runs)
-    owner_.store(me);
+    owner_.store(me, std::memory_order_relaxed);
     return;
   }
-  if (owner_.load() == me) refuse(who);  // this thread has it: a re-entry
+  if (owner_.load(std::memory_order_relaxed) == me) refuse(who);  // a re-entry
   nb::gil_scoped_release release;  // the thread that has the turn may need the GIL
   std::unique_lock<std::mutex> lock(mutex_);
   ++waiting_;
   free_.wait(lock, [this] { return claim(); });
   --waiting_;
-  owner_.store(me);
+  owner_.store(me, std::memory_order_relaxed);
 }
 
 void Turn::give() {
-  owner_.store(0);  // before the turn is free: no thread mistakes it for its own
-  busy_.store(false);
+  owner_.store(0, std::memory_order_relaxed);  // no thread mistakes the turn for its own
+  busy_.store(false);  // seq_cst: ordered before the load below (a waiter's ++ then check)
   if (waiting_.load() > 0) {
     { std::lock_guard<std::mutex> lock(mutex_); }  // a waiter checks, then sleeps, under it
     free_.notify_all();

@@ -19,14 +19,14 @@ constexpr double ROTATION_TOLERANCE = 1e-6;
 // A target's or a velocity's numbers, as copied from the caller's array: its shape as
 // numpy gives it, its values in row-major order (only for a shape the task takes).
 struct Floats {
-  std::vector<double> values;  // room for the task's largest form, reserved once
-  std::vector<long> shape;
+  static constexpr int MAX_DIMS = 64;  // NumPy's NPY_MAXDIMS
+  std::vector<double> values;          // room for the task's largest form, reserved once
+  long shape[MAX_DIMS] = {};
+  int ndim = 0;
   bool given = false;  // a velocity may be left out (None)
 
-  bool is(long n) const { return shape.size() == 1 && shape[0] == n; }
-  bool is(long rows, long cols) const {
-    return shape.size() == 2 && shape[0] == rows && shape[1] == cols;
-  }
+  bool is(long n) const { return ndim == 1 && shape[0] == n; }
+  bool is(long rows, long cols) const { return ndim == 2 && shape[0] == rows && shape[1] == cols; }
 };
 
 // What is wrong with a task's target (or velocity), in clik.InputError's words: `expected`,
