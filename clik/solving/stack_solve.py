@@ -158,7 +158,7 @@ def _largest_errors(entries: list[dict[str, Any]]) -> tuple[float, float]:
     """The largest final position [m] and orientation [rad] errors of ``task_errors`` entries.
 
     An error in metres counts as position, any other (an orientation task's [rad], a
-    posture's [rad or m], a gaze angle) as orientation: each entry's unit is its kind's.
+    posture's [rad or m]) as orientation: each entry's unit is its kind's.
     """
     pos = rot = 0.0
     for e in entries:

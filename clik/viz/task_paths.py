@@ -9,8 +9,8 @@ times ``result.t``, each as its kind draws it
 (:meth:`~clik.tasks.kind.BaseTask.trail`: the achieved point and the reference point at
 a sample). For example a frame task's origin ``p(q)`` and its reference ``p_d(t)``; a
 relative task's A origin and its reference mapped to the world through B's placement
-``oMb(q) p_d(t)``; the centre of mass; where a gaze axis points and its point. A kind
-with no point in space (a posture, a distance) has no path here.
+``oMb(q) p_d(t)``; the centre of mass. A kind with no point in space (a posture) has no
+path here.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ class TaskPath:
 
     Attributes:
         name: The task's name (its key in ``result.task_errors``).
-        kind: The task's kind (``"pose"``, ``"com"``, ``"gaze"``, ...).
+        kind: The task's kind (``"pose"``, ``"com"``, ...).
         primary: Whether it is the run's primary task (drawn as ``result.position``).
         achieved: The tracked point at each recorded sample (N, 3) [m].
         reference: Where it was asked to be (N, 3) [m]; None where its kind has no point

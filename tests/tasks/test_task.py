@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
+import clik
 from clik import FrameNotFound, InputError, Task
+from clik.tasks.kind import BaseTask
+from clik.trajectory import Hold, Line, PoseTrajectory
+from tests.tasks.kind_case import Q0, Case, panda, pose_forms, pose_row, twist
 
 FD_STEP = 1e-7
 JACOBIAN_ATOL = 1e-6
@@ -82,3 +88,20 @@ def test_bad_task_arguments(planar4r, kind, axes, message):
     with pytest.raises(InputError) as info:
         Task(planar4r, "tip", kind, axes)
     assert message in str(info.value)
+
+
+def case() -> Case:
+    """The frame task: link 4's x, y and yaw, moving 2 cm."""
+    robot = panda()
+    task: BaseTask = clik.Task(robot, "panda_link4", "pose", ["x", "y", "rz"])
+    start = task.placement(Q0)  # type: ignore[attr-defined]
+    line = Line(start.translation, start.translation + [0.0, 0.02, 0.0], 0.3)
+    traj: Any = PoseTrajectory(line, Hold(rotation=start.rotation))
+    table = (
+        'kind = "pose"\nframe = "panda_link4"\naxes = ["x", "y", "rz"]\n'
+        '[tasks.trajectory]\nkind = "hold"\nduration = 0.3'
+    )
+    return Case(
+        task, traj, table, {"frame": 3, "axes": ["q"]}, pose_forms, twist,
+        lambda q: pose_row(task.placement(q)), exact=False,  # type: ignore[attr-defined]
+    )  # fmt: skip

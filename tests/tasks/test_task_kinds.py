@@ -14,16 +14,15 @@ leads, a trajectory, a start) drives:
 - its protocol: every part of :class:`~clik.tasks.kind.BaseTask` implemented, its C++
   type bound, its words in the docs.
 
-A kind without a case here fails :func:`test_every_kind_has_a_case`: registering a kind is
-how it gets tested.
+Each kind's case is ``case()`` in ``tests/tasks/test_<its module>.py``, beside its own
+tests (:mod:`tests.tasks.kind_case`); a kind without one fails
+:func:`test_every_kind_has_a_case`: registering a kind is how it gets tested.
 """
 
 from __future__ import annotations
 
 import inspect
 import warnings
-from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -35,14 +34,10 @@ import clik
 from clik.engine import load
 from clik.errors import InputError, ScenarioError
 from clik.scenarios.runner import build
-from clik.tasks.com_task import ComTask
-from clik.tasks.distance_task import DistanceTask
-from clik.tasks.gaze_task import GazeTask
 from clik.tasks.kind import BaseTask
-from clik.tasks.posture_task import PostureTask
 from clik.tasks.registry import TASK_KINDS, kind_class
-from clik.tasks.relative_task import RelativeTask
-from clik.trajectory import Hold, JointPath, Line, PoseTrajectory
+from clik.trajectory import Hold
+from tests.tasks.kind_case import Q0, Case, case_of, hand, linear
 
 ROOT = Path(__file__).parents[2]
 ENGINES = ("python", "compiled")
@@ -52,139 +47,6 @@ ROW_TOLERANCE = 1e-6
 """Largest ``|J - J_fd| / |J|``."""
 PARITY = 1e-9
 """Largest joint difference between the engines [rad]."""
-FINGERS = {"panda_finger_joint1": 0.02, "panda_finger_joint2": 0.02}
-Q0 = np.array([0.0, -0.4, 0.0, -2.0, 0.0, 1.8, 0.8])
-"""A Panda start away from its singularities."""
-
-
-@dataclass
-class Case:
-    """A kind as a goal beside a frame task, its trajectory, and its scenario table."""
-
-    task: BaseTask
-    trajectory: Any
-    table: str
-    """Its ``[[tasks]]`` table (TOML), named ``"kind"``."""
-    bad_keys: dict[str, Any]
-    """Keys of its table and a value each refused (the key named in the error)."""
-    forms: Callable[[np.ndarray], list[Any]]
-    """Its tick targets in every form its reader takes, from one reference row."""
-    velocity: Callable[[Any, int], Any]
-    """Its tick velocity at sample ``k`` of its trajectory's samples."""
-    held: Callable[[np.ndarray], np.ndarray]
-    """Its reference row at a configuration: where it is there (its error zero)."""
-    exact: bool = True
-    """Its rows are its error's derivative everywhere (a frame's orientation rows only
-    where the error is zero: ``log3``'s derivative is the identity there)."""
-
-
-def panda() -> clik.Robot:
-    return clik.Robot.load("panda", lock=FINGERS)
-
-
-def hand(robot: clik.Robot) -> clik.Task:
-    return clik.Task(robot, "panda_hand", "position")
-
-
-def linear(s: Any, k: int) -> np.ndarray:
-    return np.asarray(s.linear_velocity[k], dtype=float)
-
-
-def twist(s: Any, k: int) -> np.ndarray:
-    return np.concatenate([s.linear_velocity[k], s.angular_velocity[k]])
-
-
-def pose_row(placement: pin.SE3) -> np.ndarray:
-    """A pose's reference row: its position, then its rotation, row-major."""
-    return np.concatenate([placement.translation, placement.rotation.ravel()])
-
-
-def pose_forms(row: np.ndarray) -> list[Any]:
-    R = row[3:].reshape(3, 3)
-    return [
-        pin.SE3(R, row[:3]),
-        pin.SE3(R, row[:3]).homogeneous,
-        pin.SE3(R, row[:3]).homogeneous.tolist(),
-    ]
-
-
-def point_forms(row: np.ndarray) -> list[Any]:
-    return [row[:3].copy(), row[:3].tolist(), pin.SE3(np.eye(3), row[:3])]
-
-
-def case_of(kind: type[BaseTask]) -> Case:
-    """The case of each kind (a kind without one fails the test below)."""
-    robot = panda()
-    if kind is clik.Task:
-        task: BaseTask = clik.Task(robot, "panda_link4", "pose", ["x", "y", "rz"])
-        start = task.placement(Q0)  # type: ignore[attr-defined]
-        line = Line(start.translation, start.translation + [0.0, 0.02, 0.0], 0.3)
-        traj: Any = PoseTrajectory(line, Hold(rotation=start.rotation))
-        table = (
-            'kind = "pose"\nframe = "panda_link4"\naxes = ["x", "y", "rz"]\n'
-            '[tasks.trajectory]\nkind = "hold"\nduration = 0.3'
-        )
-        return Case(
-            task, traj, table, {"frame": 3, "axes": ["q"]}, pose_forms, twist,
-            lambda q: pose_row(task.placement(q)), exact=False,  # type: ignore[attr-defined]
-        )  # fmt: skip
-    if kind is RelativeTask:
-        task = RelativeTask(robot, "panda_hand", "panda_link3", "position")
-        start = task.placement(Q0)  # type: ignore[attr-defined]
-        traj = Line(start.translation, start.translation + [0.0, 0.01, 0.0], 0.3)
-        table = (
-            'kind = "position"\nframe = "panda_hand"\nrelative_to = "panda_link3"\n'
-            '[tasks.trajectory]\nkind = "hold"\nduration = 0.3'
-        )
-        return Case(
-            task, traj, table, {"relative_to": 1}, point_forms, linear,
-            lambda q: pose_row(task.placement(q)),  # type: ignore[attr-defined]
-        )  # fmt: skip
-    if kind is PostureTask:
-        task = PostureTask(robot, ["panda_joint1", "panda_joint7"])
-        start_q = task.angles(Q0)  # type: ignore[attr-defined]
-        traj = JointPath([start_q, start_q + 0.05], duration=0.3)
-        table = 'kind = "posture"\njoints = ["panda_joint1", "panda_joint7"]'
-        return Case(
-            task, traj, table, {"joints": "panda_joint1"}, lambda r: [r.copy(), r.tolist()],
-            lambda s, k: s.qdot[k], task.angles,  # type: ignore[attr-defined]
-        )  # fmt: skip
-    if kind is ComTask:
-        task = ComTask(robot, ["x", "y"])
-        c0 = task.position(Q0)  # type: ignore[attr-defined]
-        traj = Line(c0, c0 + [0.01, 0.0, 0.0], 0.3)
-        table = 'kind = "com"\naxes = ["x", "y"]'
-        return Case(
-            task,
-            traj,
-            table,
-            {"axes": ["w"]},
-            point_forms,
-            linear,
-            task.position,  # type: ignore[attr-defined]
-        )
-    if kind is DistanceTask:
-        task = DistanceTask(robot, "panda_hand", "panda_link3")
-        d0 = task.distance(Q0)  # type: ignore[attr-defined]
-        traj = JointPath([[d0], [d0 - 0.02]], duration=0.3)
-        table = 'kind = "distance"\nframe = "panda_hand"\nrelative_to = "panda_link3"'
-        return Case(
-            task, traj, table, {"relative_to": 2, "frame": []},
-            lambda r: [float(r[0]), r.copy(), np.float64(r[0]), [float(r[0])]],
-            lambda s, k: float(s.qdot[k, 0]), lambda q: np.array([task.distance(q)]),  # type: ignore[attr-defined]
-        )  # fmt: skip
-    if kind is GazeTask:
-        task = GazeTask(robot, "panda_link7", [0.0, 1.0, 0.0])
-        p0 = task.ahead(Q0, 0.5)  # type: ignore[attr-defined]
-        traj = Line(p0, p0 + [0.05, 0.0, 0.0], 0.3)
-        table = 'kind = "gaze"\nframe = "panda_link7"\naxis = [0.0, 1.0, 0.0]'
-        return Case(
-            task, traj, table, {"axis": [0, 0, 0], "frame": 1.0}, point_forms, linear,
-            lambda q: task.ahead(q, 0.5),  # type: ignore[attr-defined]
-        )  # fmt: skip
-    raise AssertionError(f"no case for {kind.__name__}: add one")
-
-
 KIND_IDS = [k.__name__ for k in TASK_KINDS]
 
 

@@ -1,7 +1,8 @@
 // The kinds of task a run's goals may be, in one place (mirrors clik/tasks/registry.py).
 //
-// A kind is a config type and a run type (see goal_kind.hpp); adding one is its header and
-// source in tasks/ and its place in the list below. Nothing else names a kind: the goals'
+// A kind is a config type and a run type (see goal_kind.hpp); adding one is its header in
+// tasks/ (a source beside it if it wants one: distance_goal.hpp and gaze_goal.hpp need
+// none) and its place in the list below. Nothing else names a kind: the goals'
 // core (Goals), the ticker and the bindings visit these variants.
 #pragma once
 
