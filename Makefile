@@ -100,7 +100,8 @@ bench: $(VENV)/.installed
 # time and test count. A subprocess a test starts stops at its first UBSan report
 # (tests/conftest.py), so the test fails even when it captures that stderr.
 # Memory-budget and browser tests stay in `make test` (ASan's RSS; Chromium does not
-# start under the preload). See ../shared/NOTES.md, "Sanitizer builds of the engine".
+# start under the preload); tests/control's long session reads ASan's own count of the
+# bytes allocated instead (its quarantine keeps freed blocks resident). See ../shared/NOTES.md, "Sanitizer builds of the engine".
 SAN_VENV  := .venv-sanitize
 SAN_PY    := $(SAN_VENV)/bin/python
 SAN_PIP   := $(SAN_PY) -m pip --disable-pip-version-check
