@@ -2,10 +2,9 @@
 
 :class:`Tracker` validates its settings at construction (the law, gains [1/s],
 ``dt`` [s], damping, the rows the constraints may add) and, before each run, the
-run's size (:data:`~clik.bounds.MAX_STEPS`, :data:`~clik.bounds.MAX_RECORD_BYTES`),
-the reference's reach (:class:`ReachWarning`) and explicit Euler's stability
-bound at ``q0`` (:class:`StabilityWarning`); the run itself, sample by sample, is
-:mod:`clik.loop.tracking`. :func:`track` is the one-call form.
+run's size (:data:`~clik.bounds.MAX_STEPS`, :data:`~clik.bounds.MAX_RECORD_BYTES`), the
+reference's reach (:class:`ReachWarning`), Euler's stability bound at ``q0``
+(:class:`StabilityWarning`). The run: :mod:`clik.loop.tracking`; one call: :func:`track`.
 """
 
 from __future__ import annotations

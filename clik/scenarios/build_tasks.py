@@ -18,7 +18,7 @@ from clik.errors import ClikError, FrameNotFound, InputError, JointNotFound, Sce
 from clik.model.joints import JointValues
 from clik.objectives.objective import Objective
 from clik.tasks.goal import Goal
-from clik.tasks.registry import kind_class
+from clik.tasks.registry import kind_of_spec
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
@@ -94,7 +94,7 @@ def _error(scenario: Scenario, key: str, exc: ClikError) -> ScenarioError:
 def _task(scenario: Scenario, robot: Robot, spec: dict[str, Any], where: str) -> BaseTask:
     """The task of a ``[[tasks]]`` entry (its kind builds it); errors at ``tasks[i].<key>``."""
     try:
-        return kind_class(spec["kind"]).from_spec(robot, spec)
+        return kind_of_spec(spec).from_spec(robot, spec)
     except FrameNotFound as exc:
         key = next((k for k, v in spec.items() if v == exc.name), "frame")
         raise _error(scenario, f"{where}.{key}", exc) from None

@@ -104,6 +104,15 @@ class BaseTask(ABC):
         """
 
     @classmethod
+    def builds(cls, spec: dict[str, Any]) -> bool:
+        """Whether the task a table read describes is of this kind.
+
+        By default its ``kind`` is one of :attr:`names`; a kind that refines another's
+        table (a relative task: a frame table naming ``relative_to``) says when.
+        """
+        return spec["kind"] in cls.names
+
+    @classmethod
     def leads_spec(cls, spec: dict[str, Any]) -> bool:
         """Whether the task a table describes may be a run's primary task."""
         return cls.leads

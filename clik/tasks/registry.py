@@ -10,6 +10,8 @@ runs every generic check on.
 
 from __future__ import annotations
 
+from typing import Any
+
 from clik.errors import InputError
 from clik.tasks.com_task import ComTask
 from clik.tasks.distance_task import DistanceTask
@@ -46,3 +48,12 @@ def kind_class(name: str) -> type[BaseTask]:
         if name in cls.names:
             return cls
     raise InputError("kind", "one of " + ", ".join(repr(n) for n in kind_names()), name)
+
+
+def kind_of_spec(spec: dict[str, Any]) -> type[BaseTask]:
+    """The kind that builds the task of a table read.
+
+    The first kind whose :meth:`~clik.tasks.kind.BaseTask.builds` says so (a frame table
+    naming ``relative_to`` builds a relative task), else the kind its name reads.
+    """
+    return next((cls for cls in TASK_KINDS if cls.builds(spec)), kind_class(spec["kind"]))

@@ -99,6 +99,11 @@ class RelativeTask(BaseTask):
         return out
 
     @classmethod
+    def builds(cls, spec: dict[str, Any]) -> bool:
+        """A frame task's table naming ``relative_to``."""
+        return spec["kind"] in Task.names and spec.get("relative_to") is not None
+
+    @classmethod
     def from_spec(cls, robot: Robot, spec: dict[str, Any]) -> BaseTask:
         """The relative task of a frame task's table with ``relative_to``."""
         return cls(robot, spec["frame"], spec["relative_to"], spec["kind"], spec["axes"])

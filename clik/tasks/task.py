@@ -188,14 +188,13 @@ class Task(BaseTask):
         return spec.get("relative_to") is None
 
     @classmethod
-    def from_spec(cls, robot: Robot, spec: dict[str, Any]) -> BaseTask:
-        """A :class:`Task`, or a relative task when the table names ``relative_to``."""
-        if spec.get("relative_to") is not None:
-            from clik.tasks.relative_task import RelativeTask
+    def builds(cls, spec: dict[str, Any]) -> bool:
+        """A frame table without ``relative_to`` (with it: a relative task's)."""
+        return spec["kind"] in cls.names and spec.get("relative_to") is None
 
-            return RelativeTask(
-                robot, spec["frame"], spec["relative_to"], spec["kind"], spec["axes"]
-            )
+    @classmethod
+    def from_spec(cls, robot: Robot, spec: dict[str, Any]) -> BaseTask:
+        """A :class:`Task` of the frame in the world."""
         return cls(robot, spec["frame"], spec["kind"], spec["axes"])
 
     def trajectory_from(self, spec: dict[str, Any], q0: np.ndarray) -> Trajectory:

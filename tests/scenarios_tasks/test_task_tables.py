@@ -9,6 +9,7 @@ import pytest
 from clik import ScenarioError
 from clik.scenarios import scenario_path
 from clik.scenarios.scenario import load_scenario
+from clik.tasks.registry import kind_names
 from tests.scenarios_tasks.scenario_text import (
     HEAD,
     POSTURE,
@@ -140,7 +141,9 @@ ERRORS = [
     (
         POSTURE.replace('kind = "posture"', 'kind = "joints"'),
         "tasks[1].kind",
-        "expected one of 'position', 'orientation', 'pose', 'posture', 'com', got 'joints'",
+        "expected one of 'position', 'orientation', 'pose', 'posture', 'com', "  # then the
+        + "".join(f"'{name}', " for name in kind_names()[5:])  # kinds added since
+        + "got 'joints'",
     ),
     (POSTURE.replace("priority = 2", "prority = 2"), "tasks[1].prority", "unknown key"),
     (POSTURE.replace('name = "posture"', 'nmae = "posture"'), "tasks[1].name", "required key"),

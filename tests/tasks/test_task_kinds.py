@@ -21,6 +21,7 @@ tests (:mod:`tests.tasks.kind_case`); a kind without one fails
 
 from __future__ import annotations
 
+import importlib
 import inspect
 import warnings
 from pathlib import Path
@@ -118,6 +119,27 @@ def test_both_engines_run_it_alike(kind: type[BaseTask]) -> None:
     assert (entry["error"], entry["unit"]) == (first.what, first.unit)
     assert entry["max"] == pytest.approx(b.task_errors["kind"]["max"], abs=1e-9)
     assert ("max_orientation" in entry) == (second is not None)
+
+
+@pytest.mark.parametrize("kind", TASK_KINDS, ids=KIND_IDS)
+def test_solve_reaches_its_trajectory_s_final_value(kind: type[BaseTask]) -> None:
+    """Solve mode with the kind as a goal beside the hand's: both engines reach its final
+    value (its error within the solve's tolerances), from the same start, alike."""
+    case = case_of(kind)
+    lead = hand(case.task.robot)
+    home = lead.placement(Q0).translation
+    tasks = [
+        clik.Goal(lead, Hold(position=home, duration=0.3), name="hand"),
+        clik.Goal(case.task, case.trajectory, name="kind"),
+    ]
+    solved = {e: clik.solve(tasks=tasks, q0=Q0, engine=e, restarts=0) for e in ENGINES}
+    a, b = solved["python"], solved["compiled"]
+    assert a.success and b.success, (a.reason, b.reason)
+    assert np.abs(a.q - b.q).max() <= 1e-6
+    end = case.trajectory.sample(np.array([0.3]))
+    ref, ff = case.task.reference_arrays(end)
+    _, e, _ = rows_at(case.task, a.q, ref[0], ff[0])
+    assert np.abs(e).max() <= 1e-3
 
 
 def scenario_text(case: Case) -> str:
@@ -232,6 +254,9 @@ def test_every_kind_has_every_part_of_the_protocol(kind: type[BaseTask]) -> None
     task = case.task
     goal = task.engine_goal(load())
     assert type(goal).__module__ == "clik._engine"
+    module = importlib.import_module(kind.__module__)
+    for name in [n for n in vars(type(goal)) if n.isupper()]:  # its numbers, both engines'
+        assert getattr(type(goal), name) == getattr(module, name), name
     assert task.tick_target().target_forms()
     assert task.describe() and task.axes and len(task.axes) == task.m
     for name in kind.names:

@@ -21,6 +21,9 @@ class DistanceGoalRun;
 // `_engine.DistanceGoal`: frames A and B. Reference: rho_d (1) [m]; feed-forward: its rate.
 struct DistanceGoal {
   using Run = DistanceGoalRun;
+  // The row's direction u needs two apart origins [m] (distance_task.py's; bound as
+  // `_engine.DistanceGoal.MIN_DISTANCE`, checked against it by the kinds' tests).
+  static constexpr double MIN_DISTANCE = 1e-9;
   int frame = 0, relative_to = 0;
   static void bind(nanobind::module_& m);
 };
@@ -51,7 +54,7 @@ class DistanceGoalRun {
     const double rho = d.norm();
     pinocchio::getFrameJacobian(c.model, c.data, fa, LWA, Ja_);
     pinocchio::getFrameJacobian(c.model, c.data, fb, LWA, Jb_);
-    const Vec3 u = d / std::max(rho, MIN_DISTANCE);
+    const Vec3 u = d / std::max(rho, DistanceGoal::MIN_DISTANCE);
     ext.e[row0] = ref[0] - rho;
     ext.J.row(row0).noalias() = u.transpose() * (Ja_.topRows<3>() - Jb_.topRows<3>());
     ext.ff[row0] = ff[0];
@@ -79,7 +82,6 @@ class DistanceGoalRun {
   bool needs_com() const { return false; }
 
  private:
-  static constexpr double MIN_DISTANCE = 1e-9;  // u needs two apart origins [m]
   int a_, b_;
   Eigen::Matrix<double, 6, Eigen::Dynamic> Ja_, Jb_;
 };
@@ -95,7 +97,8 @@ inline void DistanceGoal::bind(nanobind::module_& m) {
           },
           nb::kw_only(), nb::arg("frame"), nb::arg("relative_to"))
       .def_ro("frame", &DistanceGoal::frame)
-      .def_ro("relative_to", &DistanceGoal::relative_to);
+      .def_ro("relative_to", &DistanceGoal::relative_to)
+      .attr("MIN_DISTANCE") = MIN_DISTANCE;
 }
 
 }  // namespace clik

@@ -26,6 +26,9 @@ class GazeGoalRun;
 // g (3) [m] in the world; feed-forward: its velocity (3) [m/s] (the rows' depend on q).
 struct GazeGoal {
   using Run = GazeGoalRun;
+  // Below it, the limits of theta / s (gaze_task.py's; bound as
+  // `_engine.GazeGoal.SMALL_SINE`, checked against it by the kinds' tests).
+  static constexpr double SMALL_SINE = 1e-8;
   int frame = 0;
   Vec3 axis = Vec3::UnitZ();
   static void bind(nanobind::module_& m);
@@ -34,7 +37,7 @@ struct GazeGoal {
 // The error e (2) of a direction w in the gaze axes and E = de/dw (2 x 3)
 // (clik/tasks/gaze_task.py's gaze_error).
 inline void gaze_error(const Vec3& w, Eigen::Vector2d& e, Eigen::Matrix<double, 2, 3>& E) {
-  constexpr double SMALL_SINE = 1e-8;  // below it, the limits of theta / s (gaze_task.py's)
+  constexpr double SMALL_SINE = GazeGoal::SMALL_SINE;
   double wx = w[0];
   const double wy = w[1], wz = w[2];
   double s = std::hypot(wx, wy);
@@ -128,7 +131,8 @@ inline void GazeGoal::bind(nanobind::module_& m) {
           [](GazeGoal* self, int frame, const Vec3& axis) { new (self) GazeGoal{frame, axis}; },
           nb::kw_only(), nb::arg("frame"), nb::arg("axis"))
       .def_ro("frame", &GazeGoal::frame)
-      .def_prop_ro("axis", [](const GazeGoal& s) { return s.axis; });
+      .def_prop_ro("axis", [](const GazeGoal& s) { return s.axis; })
+      .attr("SMALL_SINE") = SMALL_SINE;
 }
 
 }  // namespace clik

@@ -72,7 +72,7 @@ struct ValuesTarget {
             Refusal& why) const;
 
  private:
-  long size(const Floats& f) const { return f.is(m) || (m == 1 && f.shape.empty()) ? m : -1; }
+  long size(const Floats& f) const { return f.is(m) || (m == 1 && f.ndim == 0) ? m : -1; }
   std::string forms(const std::string& words, const std::string& in) const;
 };
 
