@@ -337,7 +337,7 @@ def test_every_constant_both_engines_declare_is_checked_to_agree():
         n for p in MODULES.values() for n in PY_CONSTANT.findall(p.read_text(encoding="utf-8"))
     }
     checked = {attribute for _, attribute in SHARED.values()}
-    # a kind of task binds its own on its engine type (`_engine.GazeGoal.SMALL_SINE`),
+    # a kind of task binds its own on its engine type (`_engine.<Kind>Goal.<NAME>`),
     # checked against its module's by tests/tasks/test_task_kinds.py
     engine = importlib.import_module("clik._engine")
     types = [getattr(engine, n) for n in dir(engine) if n.endswith("Goal")]

@@ -138,7 +138,7 @@ class ValuesTarget:
 
     Attributes:
         m: The values.
-        what: What they are, in words (``"joint values"``, ``"distance"``).
+        what: What they are, in words (``"joint values"``).
         unit: Their unit (``"rad or m"``, ``"m"``).
         rate: What their velocities are (``"joint velocities"``, ``"rate"``).
         rate_unit: Their unit.

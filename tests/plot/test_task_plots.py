@@ -56,7 +56,7 @@ class TestTaskErrors:
         assert shown[1].get_title() == "elbow (posture, priority 2)"
         assert all(ax.get_yscale() == "log" for ax in shown)
         assert len(fig.axes) == 4 and fig.axes[0].get_ylabel() == "|e| [m], [rad]"
-        assert shown[1].get_ylabel() == "|e| [rad or m]"
+        assert shown[1].get_ylabel() == "|e| [rad]"  # the Panda's joints all revolute
         assert shown[2].get_ylabel() == "|e| [rad]" and shown[3].get_ylabel() == "|e| [m]"
 
     def test_each_panel_draws_its_own_record(self, panda_runs):
@@ -91,10 +91,10 @@ class TestTaskErrors:
         assert len(shown) == 4 and len(fig.axes) == 6
         hand_labels = [line.get_label() for line in shown[0].lines]
         assert hand_labels == [
-            "alone: position [m]", "alone: orientation [rad]",
-            "several: position [m]", "several: orientation [rad]",
+            "alone: position error [m]", "alone: orientation error [rad]",
+            "several: position error [m]", "several: orientation error [rad]",
         ]  # fmt: skip
-        assert [line.get_label() for line in shown[1].lines] == ["several: joints [rad or m]"]
+        assert [line.get_label() for line in shown[1].lines] == ["several: joints' error [rad]"]
 
     def test_one_task_run_has_one_panel(self):
         robot = clik.Robot.load("planar4r")
