@@ -212,6 +212,9 @@ def start_solve(tmp_path: Path) -> tuple[subprocess.Popen, Path]:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        # Ctrl-C reaches it as from a terminal even where this test runs with SIGINT
+        # ignored (a shell's background job): the child would inherit SIG_IGN.
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     deadline = time.monotonic() + 60.0
     while not out.exists() and time.monotonic() < deadline and proc.poll() is None:

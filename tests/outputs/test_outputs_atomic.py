@@ -74,6 +74,9 @@ def start_solve(scenario: Path, out: Path, *flags: str) -> subprocess.Popen:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        # Ctrl-C reaches it as from a terminal even where this test runs with SIGINT
+        # ignored (a shell's background job): the child would inherit SIG_IGN.
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     work = out.parent / f".{out.name}.tmp-{proc.pid}"
     deadline = time.monotonic() + PROC_TIMEOUT
