@@ -56,6 +56,8 @@ from clik.solving.solve_result import SolveResult
 from clik.speed.speed_limits import SpeedLimits
 from clik.speed.velocity_limits import track_within_limits
 from clik.tasks.com_task import ComTask
+from clik.tasks.distance_task import DistanceTask
+from clik.tasks.gaze_task import GazeTask
 from clik.tasks.goal import Goal
 from clik.tasks.posture_task import PostureTask
 from clik.tasks.relative_task import RelativeTask
@@ -66,10 +68,12 @@ __all__ = [
     "ClikWarning",
     "ComTask",
     "Controller",
+    "DistanceTask",
     "EngineError",
     "ExportError",
     "FrameNotFound",
     "FreeJointWeldedWarning",
+    "GazeTask",
     "GeometryError",
     "Goal",
     "InfeasibleError",

@@ -6,7 +6,7 @@ is built from tasks: the extended task of eqs. (24)-(25), the task's rows and
 the constraints' active rows stacked for the law (``extended_task``), and the
 task's manipulability ``w(q)`` (``manipulability``).
 
-The kinds of task (``kind``: what each says): a frame in the world (``task``), a
-frame in another frame (``relative_task``), joints (``posture_task``), the centre of
-mass (``com_task``); a ``goal`` gives one its trajectory, gain and priority.
+The kinds of task (``kind``: what each says; ``registry``: the list): each one module
+``*_task``, e.g. a frame in the world (``task``); a ``goal`` gives one its trajectory,
+gain and priority.
 """

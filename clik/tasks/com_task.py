@@ -41,6 +41,8 @@ class ComTask(BaseTask):
     """
 
     names = ("com",)
+    table_keys = '`axes` (default `["x", "y", "z"]`)'
+    table_trajectory = "the keys of `[trajectory]` (optional: hold the start's centre of mass)"
     kind = "com"
     has_position = True
     has_orientation = False

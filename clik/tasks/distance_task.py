@@ -48,6 +48,12 @@ class DistanceTask(BaseTask):
     """
 
     names = ("distance",)
+    table_keys = "`frame`, `relative_to`: the distance between their origins [m], one row"
+    table_trajectory = (
+        'optional: `kind = "hold"` with `value` [m] (default: the start\'s distance) and '
+        '`duration` [s], or `kind = "line"` with `goal` [m] and `duration` [s]'
+    )
+    example = "baxter_box_width"
     kind = "distance"
     m = 1
     reference_size = 1

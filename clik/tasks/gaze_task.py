@@ -96,6 +96,16 @@ class GazeTask(BaseTask):
     """
 
     names = ("gaze",)
+    table_keys = (
+        "`frame`, `axis` (in the frame, default `[0, 0, 1]`): the axis points at a point, "
+        "two rows, the roll free"
+    )
+    table_trajectory = (
+        'the point, in the world: `kind = "hold"` with `position` [m] (default: 1 m along '
+        'the axis at the start) and `duration`, or `kind = "line"` with `start` (default: '
+        "the same), `goal` [m] and `duration` [s]"
+    )
+    example = "panda_look_at"
     kind = "gaze"
     m = 2
     reference_size = 3

@@ -72,10 +72,19 @@ class BaseTask(ABC):
         m: Rows.
         reference_size: Floats of reference per sample.
         leads: Whether it may be a run's primary task (a frame in the world).
+        table_keys: Its ``[[tasks]]`` table's keys and what they mean, in Markdown: its
+            row of the scenario guide's table of kinds (docs/guides/scenarios.md, made
+            from these by docs/hooks/task_kinds.py). Empty: a kind read from another
+            kind's table, documented there.
+        table_trajectory: What its ``[tasks.trajectory]`` takes, in Markdown (same row).
+        example: A shipped scenario that uses it (``clik.scenarios``), or None.
     """
 
     names: ClassVar[tuple[str, ...]] = ()
     leads: ClassVar[bool] = False
+    table_keys: ClassVar[str] = ""
+    table_trajectory: ClassVar[str] = ""
+    example: ClassVar[str | None] = None
     robot: Robot
     kind: str
     m: int

@@ -51,6 +51,8 @@ class PostureTask(BaseTask):
     """
 
     names = ("posture",)
+    table_keys = "`joints` (default: every one-DoF joint)"
+    table_trajectory = "a joint path (optional: hold the start), below"
     kind = "posture"
 
     def __init__(self, robot: Robot, joints: Sequence[str] | None = None) -> None:

@@ -3,9 +3,10 @@
 A new kind of task is its module in ``clik/tasks/`` (one :class:`~clik.tasks.kind.BaseTask`
 class: its scenario table, rows, reference, target forms, norms and drawing), its C++
 type in ``src/engine/tasks/`` (a header, listed in ``task_kinds.hpp``), its line here,
-its derivation in docs/method.md, its keys in docs/guides/scenarios.md and its tests in
-``tests/tasks/test_<its module>.py``, whose ``case()`` ``tests/tasks/test_task_kinds.py``
-runs every generic check on.
+its export from ``clik``, its derivation in docs/method.md, an example scenario and its
+tests in ``tests/tasks/test_<its module>.py``, whose ``case()``
+``tests/tasks/test_task_kinds.py`` runs every generic check on. The docs' lists of kinds
+(the scenario guide's table, the API page) are made from the registry.
 """
 
 from __future__ import annotations

@@ -130,6 +130,8 @@ class Task(BaseTask):
 
     names = ("position", "orientation", "pose")
     leads = True
+    table_keys = '`frame`, `axes`; `relative_to = "other_frame"`: the frame\'s pose in that frame'
+    table_trajectory = "the keys of `[trajectory]` (required), in `relative_to`'s axes"
     reference_size = 12
     """A pose per sample: the position (3) [m], then the rotation, row-major (9)."""
 

@@ -22,6 +22,7 @@ tests (:mod:`tests.tasks.kind_case`); a kind without one fails
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import inspect
 import warnings
 from pathlib import Path
@@ -34,6 +35,7 @@ import pytest
 import clik
 from clik.engine import load
 from clik.errors import InputError, ScenarioError
+from clik.scenarios import scenario_path
 from clik.scenarios.runner import build
 from clik.tasks.kind import BaseTask
 from clik.tasks.registry import TASK_KINDS, kind_class
@@ -261,7 +263,22 @@ def test_every_kind_has_every_part_of_the_protocol(kind: type[BaseTask]) -> None
     assert task.describe() and task.axes and len(task.axes) == task.m
     for name in kind.names:
         assert kind_class(name) is kind
-    docs = (ROOT / "docs" / "guides" / "scenarios.md").read_text()
-    for name in kind.names or ("relative_to",):
-        assert f'kind = "{name}"' in docs or name in docs, name
+    # its row of the scenario guide's table of kinds (docs/hooks/task_kinds.py makes it)
+    assert bool(kind.names) == bool(kind.table_keys) == bool(kind.table_trajectory)
+    assert "<!-- clik-task-kinds -->" in (ROOT / "docs" / "guides" / "scenarios.md").read_text()
+    rows = guide_table().splitlines()
+    for name in kind.names:
+        assert sum(f'`"{name}"`' in row and kind.table_keys in row for row in rows) == 1, name
+    if kind.example is not None:
+        assert scenario_path(kind.example).is_file()
+    assert getattr(clik, kind.__name__) is kind and kind.__name__ in clik.__all__  # its API entry
     assert type(task).__name__ in (ROOT / "docs" / "method.md").read_text()
+
+
+def guide_table() -> str:
+    """The scenario guide's table of kinds, as the docs build makes it."""
+    spec = importlib.util.spec_from_file_location("task_kinds", ROOT / "docs/hooks/task_kinds.py")
+    assert spec is not None and spec.loader is not None
+    hook = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hook)
+    return str(hook.table())
