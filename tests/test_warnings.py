@@ -42,7 +42,8 @@ def module_name(path: Path) -> str:
 
 def clik_warning_classes() -> list[type[Warning]]:
     """Every ``Warning`` subclass defined in a module of ``clik`` (each module imported)."""
-    for module in pkgutil.walk_packages(clik.__path__, "clik."):
+    # the package's own folder: an editable install's clik.__path__ may hold more entries
+    for module in pkgutil.walk_packages([str(PACKAGE)], "clik."):
         importlib.import_module(module.name)
 
     def subclasses(cls: type) -> list[type]:
