@@ -55,7 +55,7 @@ def tick_section(report: dict[str, Any]) -> list[str]:
             f"| {name} | {tool} | {t['median_us']:.1f} | {t['p10_us']:.1f} | {t['p90_us']:.1f} | "
             f"{fmt(over)} | {t['realtime_factor']:.1f} | {t['status']} | "
             f"{fmt(q['max_position_error_m'])} | {fmt(q['max_orientation_error_rad'])} | "
-            f"{fmt(q['min_clearance_m'])} | {fmt(q['velocity_ratio'])} |"
+            f"{fmt(q.get('min_clearance_m'))} | {fmt(q['velocity_ratio'])} |"
         )
     lines += [
         "",

@@ -17,6 +17,7 @@ from benchmarks.pink_barrier import pink_obstacles
 from benchmarks.step_dual_arm import dual_arm_variants
 from benchmarks.step_pink import pink_step_variant
 from benchmarks.step_variant import Variant, clik_variant
+from benchmarks.whole_body import humanoid_scene, step_variant
 from clik.constraints import ConstraintSet, JointLimits, Obstacle
 from clik.loop.laws import LawName
 from clik.scenarios import scenario_path
@@ -286,4 +287,4 @@ def step_variants(config: BenchConfig, pink: Pink | None) -> list[Variant]:
         variants += planar_variants(planar, both, engine) + panda_variants(panda, engine)
     if pink is not None:
         variants += pink_variants(pink, panda)
-    return variants + dual_arm_variants(config, ENGINES, pink)
+    return variants + dual_arm_variants(config, ENGINES, pink) + [step_variant(humanoid_scene())]

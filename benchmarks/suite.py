@@ -73,6 +73,7 @@ CLIK_STEP_US = {
     "panda_pose_obstacles_1_active": "panda_pose_obstacles_1_active",
     "panda_pose_obstacles_transpose": "panda_pose_obstacles_transpose",
     "dual_arm": "dual_arm",
+    "humanoid": "humanoid",
 }
 """``bench.json``'s ``step_us`` keys of clik's compiled engine and the line each is the
 median of; ``panda_pose_obstacles`` is the line with one obstacle row active."""
@@ -202,7 +203,7 @@ def tick_figures(m: Measured) -> dict[str, Any]:
         "tick_ratios": {
             f"{peer}_over_{line}": ratio(median(f"{peer}_{line}"), median(line))
             for peer in ("pink", "mink")
-            for line in ("panda_pose", "panda_pose_obstacles")
+            for line in ("panda_pose", "panda_pose_obstacles", "dual_arm", "humanoid")
         },
     }
 

@@ -1,7 +1,8 @@
 """Tick cost [us per tick]: clik's controller, pink and mink stepped once per 1 ms tick.
 
 Every tick line (:mod:`benchmarks.tick_clik`, :mod:`benchmarks.tick_pink`,
-:mod:`benchmarks.tick_mink`) runs the Panda's pose task on the shipped circle, one
+:mod:`benchmarks.tick_mink`) runs the Panda's pose task on the shipped circle, and the
+whole-body lines (:mod:`benchmarks.tick_whole_body`) several tasks on Baxter and Talos, one
 Python call per tick, timed over the whole per-tick loop; its figure is the median
 over interleaved rounds of the per-tick mean (:func:`~benchmarks.step.interleaved_rounds`,
 as the step lines). Its joints then go through the same quality check
@@ -24,14 +25,21 @@ from benchmarks.tick_mink import mink_tick_variants
 from benchmarks.tick_pink import pink_tick_variants
 from benchmarks.tick_quality import QualityCheck
 from benchmarks.tick_variant import TickVariant, tick_reference
+from benchmarks.tick_whole_body import whole_body_variants
 
 TICK_LINES = (
     "panda_pose",
     "panda_pose_obstacles",
+    "dual_arm",
+    "humanoid",
     "pink_panda_pose",
     "pink_panda_pose_obstacles",
+    "pink_dual_arm",
+    "pink_humanoid",
     "mink_panda_pose",
     "mink_panda_pose_obstacles",
+    "mink_dual_arm",
+    "mink_humanoid",
 )
 """The tick lines, in report order: clik's, pink's, mink's (``bench.json``'s ``tick_us``
 keys; a missing library's are null)."""
@@ -60,6 +68,7 @@ def bench_ticks(
         variants += pink_tick_variants(pink, panda)
     if mink is not None:
         variants += mink_tick_variants(mink, panda, reference)
+    variants += whole_body_variants(pink, mink)
     samples, infos, ticks_of = interleaved_rounds(variants, config.rounds, log, "tick")
     check = QualityCheck(
         panda.robot, panda.task.frame_id, reference, OBSTACLES_ONE_ACTIVE, OBSTACLE_RADIUS
@@ -69,6 +78,6 @@ def bench_ticks(
         out[v.name] = {
             **line_timing(v.description, samples[v.name], "ticks_per_run", ticks_of[v.name]),
             **infos[v.name],
-            "quality": check(v.joints()),
+            "quality": (v.check or check)(v.joints()),
         }
     return out

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -74,6 +75,9 @@ class TickVariant(Variant):
         joints: Gives the joints of the last run, ``q_k`` at every tick time, ``q_0``
             first (m, nq) [rad]: row k is the joints at ``t_k`` (the configuration the
             tick at ``t_k`` starts from; the last row, the one the last tick commands).
+        check: The line's own quality check of those joints (None: the Panda's,
+            :class:`~benchmarks.tick_quality.QualityCheck`).
     """
 
     joints: Callable[[], np.ndarray]
+    check: Callable[[np.ndarray], dict[str, Any]] | None = None

@@ -136,6 +136,15 @@ class Law {
   void remove_directions(int p);
   bool remove_rows(const double* M, int n, const double* L, const int* lo, const int* hi);
   bool orthonormal_rows(const double* M, int n, const int* lo, const int* hi, double* L);
+  // Two levels, the second of unit rows (a posture: loop/unit_level.cpp): without Z.
+  bool projected_levels(const ExtendedTask& ext, int v, double& blocked);
+  void project_free(const double* M1, int n1, int f, const double* L, double* x);
+  bool unit_plan_ = false;  // two levels, no objective, the second's rows one column each
+  std::vector<int> fpos_, fcols_, epos_;  // F: each column's place (-1: held), its columns; E
+  std::vector<char> hit_;  // a free column the second level's rows reach
+  Mat M1_, Pe_;            // level 1 on F (n1, f); L^-1 of its E columns (n1, e)
+  Eigen::MatrixXd H_, Hs_;  // P^T P (e, e); its factor, and room for another
+  Vec u_, g_, t_, s1_;     // F vectors (nv); level 1's (n1)
   bool q_ready_ = false;  // solve_rows left the level's Q in P_ (remove_rows uses it)
   bool by_levels_ = false;
   std::vector<int> ends_, zlevel_;

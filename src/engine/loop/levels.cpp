@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "loop/laws.hpp"
+#include "loop/regular_factor.hpp"
 #include "loop/small_dense.hpp"
 
 namespace clik {
@@ -59,53 +60,25 @@ Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& 
   }
   jlo_ = scan_rows_ ? std::vector<int>(static_cast<size_t>(m), 0) : plan.lo;
   jhi_ = scan_rows_ ? std::vector<int>(static_cast<size_t>(m), nv) : plan.hi;
+  unit_plan_ = L == 2 && zlevel_.empty() && !scan_rows_;
+  for (int i = ends_[0]; unit_plan_ && i < m; ++i) unit_plan_ = jhi_[i] == jlo_[i] + 1;
+  if (!unit_plan_) return;
+  const int n1 = ends_[0];
+  fpos_.assign(static_cast<size_t>(nv), 0);
+  fcols_.assign(static_cast<size_t>(nv), 0);
+  epos_.assign(static_cast<size_t>(nv), 0);
+  hit_.assign(static_cast<size_t>(nv), 0);
+  M1_.setZero(n1, nv);
+  Pe_.setZero(n1, nv);
+  H_.setZero(nv, nv);
+  Hs_.setZero(nv, 2 * nv);  // the factor, and a scratch factor
+  u_.setZero(nv);
+  g_.setZero(nv);
+  t_.setZero(nv);
+  s1_.setZero(std::max(n1, 2 * nv));
 }
 
 namespace {
-
-// The step budget on a part (a row of parts_, or a vector).
-template <typename V>
-void budget(V&& qdot, double dt) {
-  const double step = qdot.size() ? qdot.cwiseAbs().maxCoeff() * dt : 0.0;
-  if (step > STEP_BUDGET) qdot *= STEP_BUDGET / step;
-}
-
-// S = A + shift I (n x n lower triangles, leading dimensions lda, lds), factorised in
-// place (S = L, L L^T): whether it is positive definite.
-bool factor_shifted(const double* A, int lda, int n, double shift, double* S, int lds) {
-  for (int j = 0; j < n; ++j) {
-    std::copy(A + j * lda + j, A + j * lda + n, S + j * lds + j);
-    S[j * lds + j] += shift;
-  }
-  return small::cholesky(S, lds, n);
-}
-
-// Whether L L^T - d2 I (L lower, n x n, from a factorisation of a matrix whose diagonal
-// is at most top) shows every eigenvalue above the floor by small::eigen_lower_bound,
-// less d2 and the factorisation's rounding, (n + 1) n eps top (Higham 2002, thm. 10.3).
-// False is inconclusive. work holds 2 n.
-bool bound_clears(const double* L, int ld, int n, double top, double floor, double d2,
-                  double* work) {
-  const double rounding = 2.0 * (n + 1) * n * std::numeric_limits<double>::epsilon() * top;
-  return n > 4 && small::eigen_lower_bound(L, ld, n, work) - d2 - rounding > floor;
-}
-
-// S = the factor of A + d2 I (lower, S S^T) when A's eigenvalues are above the floor
-// (and A + d2 I positive definite); false otherwise. The floor is shown cleared by the
-// factor's own eigenvalue bound in the regular case; only when that bound is
-// inconclusive is A - floor I factorised too (first, for n <= 4, where a factorisation
-// costs less than the bound). work holds 2 n.
-bool factor_regular(const double* A, int lda, int n, double floor, double d2, double* S,
-                    int lds, double* work) {
-  if (n <= 4) {
-    return factor_shifted(A, lda, n, -floor, S, lds) && factor_shifted(A, lda, n, d2, S, lds);
-  }
-  if (!factor_shifted(A, lda, n, d2, S, lds)) return false;
-  double top = 0.0;
-  for (int j = 0; j < n; ++j) top = std::max(top, A[j * lda + j] + d2);
-  if (bound_clears(S, lds, n, top, floor, d2, work)) return true;
-  return factor_shifted(A, lda, n, -floor, S, lds) && factor_shifted(A, lda, n, d2, S, lds);
-}
 
 // The largest row norm of n contiguous rows of nv (0 without rows), each row taken over
 // [lo[i], hi[i]) where it may not be zero (with scan, found: a NaN or an infinite entry
@@ -268,7 +241,7 @@ bool Law::solve_rows(Level& lv, const double* M, const Tolerances& tol) {
 // floor: JN JN^T's nonzero eigenvalues are M^T M's.
 bool Law::solve_columns(Level& lv, const double* M, const Tolerances& tol) {
   const int n = static_cast<int>(lv.rest.size()), k = k_, nv = static_cast<int>(Z_.rows());
-  small::gram_columns(M, nv, n, k, G_.data(), nv);
+  small::gram_columns(M, nv, n, k, G_.data(), nv, lv.work.data());
   if (!factor_regular(G_.data(), nv, k, tol.floor, tol.d2, Gs_.data(), nv, lv.work.data())) {
     return false;
   }
@@ -337,13 +310,19 @@ double Law::prioritized_levels(const ExtendedTask& ext, int r, Eigen::Ref<Vec> q
     return 0.0;
   }
   parts_.setZero();
+  double blocked = 0.0;
+  if (unit_plan_ && projected_levels(ext, v, blocked)) {
+    qdot = out_;
+    qdot_c_ = parts_.row(0).transpose();
+    return blocked;
+  }
+  if (unit_plan_) parts_.setZero();  // the general form below, from the start
   k_ = nv;
   z_identity_ = true;
   const int e1 = ends_[0];
   const double scale1 = lscale_[0];
   if (v > 0) level_constraints(ext, v, scale1);
   out_ = parts_.row(0).transpose();
-  double blocked = 0.0;
   int start = 0;
   for (int l = 0; l < L; ++l) {
     Level& lv = level_[static_cast<size_t>(l)];

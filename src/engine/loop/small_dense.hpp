@@ -275,15 +275,18 @@ inline void gram_rows(const double* R, int ldr, int n, int cols, double* A, int 
 }
 
 // G = R^T R (cols x cols, both triangles) of the n rows of R (row i at R + i * ldr):
-// few columns (the directions a level has left), each sum down a column.
-inline void gram_columns(const double* R, int ldr, int n, int cols, double* G, int ld) {
+// column a of G's lower triangle is sum_i R(i, a) R(i, 0..a), the rows combined four at
+// a time (sub_rows: no chain of dependent sums). col holds n values (R's column a).
+inline void gram_columns(const double* R, int ldr, int n, int cols, double* G, int ld,
+                         double* col) {
   for (int a = 0; a < cols; ++a) {
-    for (int b = 0; b <= a; ++b) {
-      double s = 0.0;
-      for (int i = 0; i < n; ++i) s += R[i * ldr + a] * R[i * ldr + b];
-      G[a * ld + b] = s;
-      G[b * ld + a] = s;
-    }
+    for (int i = 0; i < n; ++i) col[i] = R[i * ldr + a];
+    double* g = G + a * ld;
+    std::fill(g, g + a + 1, 0.0);
+    sub_rows<true>(col, R, ldr, n, g, a + 1);
+  }
+  for (int a = 0; a < cols; ++a) {
+    for (int b = 0; b < a; ++b) G[b * ld + a] = G[a * ld + b];
   }
 }
 
