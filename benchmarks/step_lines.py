@@ -287,4 +287,6 @@ def step_variants(config: BenchConfig, pink: Pink | None) -> list[Variant]:
         variants += planar_variants(planar, both, engine) + panda_variants(panda, engine)
     if pink is not None:
         variants += pink_variants(pink, panda)
-    return variants + dual_arm_variants(config, ENGINES, pink) + [step_variant(humanoid_scene())]
+    humanoid = humanoid_scene()
+    whole_body = [step_variant(humanoid, engine) for engine in ENGINES]
+    return variants + dual_arm_variants(config, ENGINES, pink) + whole_body

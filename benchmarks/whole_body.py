@@ -17,7 +17,6 @@ joints by Pinocchio's forward kinematics against the references.
 from __future__ import annotations
 
 import itertools
-import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,6 +25,7 @@ import pinocchio as pin
 
 import clik
 from benchmarks.config import DT
+from benchmarks.step_dual_arm import POSTURE_GAIN, dual_arm
 from benchmarks.step_variant import RunOutcome, Variant
 from clik.constraints.constraint_set import ConstraintSet
 from clik.constraints.joint_limits import JointLimits
@@ -33,14 +33,8 @@ from clik.trajectory import Circle, Hold, JointPath, Line, PoseTrajectory, time_
 
 GAIN = 100.0
 """Gain of the level-1 tasks [1/s]."""
-POSTURE_GAIN = 10.0
-"""Gain of the posture task (level 2) [1/s]."""
 DURATION = 2.0
 """Length of both scenes [s] (2,001 ticks)."""
-BOX_SHIFT = (0.05, 0.0, 0.1)
-"""Where Baxter's hands carry the box [m]."""
-BAXTER_BENT = {"s1": -0.6, "e1": 1.2, "w1": 0.9}
-"""Both of Baxter's arms' start (its reference posture is near-singular) [rad]."""
 TALOS_SOLES = ("left_sole_link", "right_sole_link")
 TALOS_HAND = "gripper_right_base_link"
 HAND_RADIUS = 0.05
@@ -202,25 +196,17 @@ def _joint(robot: clik.Robot, q: np.ndarray, name: str, value: float) -> None:
 
 
 def dual_arm_scene() -> WholeBody:
-    """Baxter carrying a box along a 10 cm line: two hands, a posture, joint ranges."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # its grippers' mimic joints, locked here
-        robot = clik.Robot.load(
-            "baxter", lock={"l_gripper_l_finger_joint": 0.0, "r_gripper_l_finger_joint": 0.0}
-        )
-    q0 = robot.q_reference.copy()
-    for side in ("left", "right"):
-        for joint, value in BAXTER_BENT.items():
-            _joint(robot, q0, f"{side}_{joint}", value)
-    goals = []
-    for side in ("left", "right"):
-        hand = clik.Task(robot, f"{side}_hand_link", "pose")
-        start = hand.placement(q0)
-        line = Line(start.translation, start.translation + np.array(BOX_SHIFT), DURATION)
-        goals.append(
-            clik.Goal(hand, PoseTrajectory(line, Hold(rotation=start.rotation)), name=side)
-        )
-    posture = clik.PostureTask(robot)
+    """Baxter carrying a box along a 10 cm line: two hands, a posture, joint ranges.
+
+    The ``dual_arm`` step line's problem (:func:`benchmarks.step_dual_arm.dual_arm`).
+    """
+    problem = dual_arm(DURATION)
+    robot, q0 = problem.robot, problem.q0
+    goals = [
+        clik.Goal(hand, line, name=side)
+        for side, hand, line in zip(("left", "right"), problem.hands, problem.lines, strict=True)
+    ]
+    posture = problem.posture
     goals.append(clik.Goal(posture, JointPath(posture.angles(q0)), name="posture", priority=2,
                            gain=POSTURE_GAIN))  # fmt: skip
     text = (
@@ -263,15 +249,19 @@ def humanoid_scene() -> WholeBody:
     return _scene("humanoid", robot, q0, goals, text)
 
 
-def step_variant(scene: WholeBody) -> Variant:
+def step_variant(scene: WholeBody, engine: str = "compiled") -> Variant:
     """The scene offline (``step_us.<name>``): one ``Tracker.run`` over its trajectories."""
-    tracker = scene.tracker()
+    tracker = scene.tracker(engine)
 
     def run() -> RunOutcome:
         result = tracker.run(q0=scene.q0)
         errors = result.task_errors
         worst = max(errors[name]["max"] for name in scene.poses)
-        info = {"status": result.status, "max_task_error": worst, "law": tracker.law}
+        info = {"status": result.status, "max_task_error": worst, "law": tracker.law,
+                "engine": engine}  # fmt: skip
         return result.steps, result.wall_time_s, info
 
-    return Variant(scene.name, f"offline (clik.Tracker.run): {scene.text}", run)
+    text = f"offline (clik.Tracker.run): {scene.text}"
+    if engine == "compiled":
+        return Variant(scene.name, text, run)
+    return Variant(f"python_{scene.name}", f"Python engine: {text}", run)

@@ -221,11 +221,17 @@ def test_targets_come_from_the_shipped_toml(quick):
     shipped = load_targets()
     assert [t["name"] for t in report["targets"]] == [t.name for t in shipped]
     assert [t["target"] for t in report["targets"]] == [t.wanted for t in shipped]
-    assert len(shipped) == 22
+    assert len(shipped) == 28
     by_measure = {(t.measure, t.over): t for t in shipped}
     assert by_measure[("memory_growth_mb.controller_session", None)].bound == 1.0
     assert by_measure[("controller_session.result_ms", None)].bound == 50.0
     assert by_measure[("step_us.dual_arm", None)].bound == 6.0
+    assert by_measure[("tick_us.dual_arm", None)].bound == 6.0
+    assert by_measure[("tick_us.pink_dual_arm", "tick_us.dual_arm")].bound == 12.0
+    assert by_measure[("tick_us.humanoid", None)].bound == 15.0
+    assert by_measure[("tick_us.pink_humanoid", "tick_us.humanoid")].bound == 10.0
+    assert by_measure[("tick_us.mink_humanoid", "tick_us.humanoid")].bound == 5.0
+    assert by_measure[("step_us.humanoid", None)].bound == 8.0
     assert by_measure[("step_us.pink_dual_arm", "step_us.dual_arm")].bound == 30.0
     assert by_measure[("step_us.planar4r", None)].bound == 1.5
     assert by_measure[("step_us.zoo_obstacle_median", None)].bound == 20.0

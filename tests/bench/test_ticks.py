@@ -34,9 +34,11 @@ QUALITY_FIELDS = (
     "velocity_ratio",
 )
 PEER_LINES = {
-    "pink": ("pink_panda_pose", "pink_panda_pose_obstacles"),
-    "mink": ("mink_panda_pose", "mink_panda_pose_obstacles"),
+    "pink": ("pink_panda_pose", "pink_panda_pose_obstacles", "pink_dual_arm", "pink_humanoid"),
+    "mink": ("mink_panda_pose", "mink_panda_pose_obstacles", "mink_dual_arm", "mink_humanoid"),
 }
+WHOLE_BODY = ("dual_arm", "humanoid")
+"""The several-task lines (no obstacle: no clearance), clik's and its peers'."""
 
 
 def test_the_quick_run_has_every_tick_line(quick):
@@ -66,11 +68,21 @@ def test_tick_quality_is_finite_and_clik_tracks(quick):
     for name, quality in report["tick_quality"].items():
         if quality is None:
             continue
-        assert all(math.isfinite(quality[f]) for f in QUALITY_FIELDS), (name, quality)
+        whole_body = name.endswith(WHOLE_BODY)
+        fields = [f for f in QUALITY_FIELDS if not (whole_body and f == "min_clearance_m")]
+        assert all(math.isfinite(quality[f]) for f in fields), (name, quality)
         assert quality["max_position_error_m"] >= 0 and quality["velocity_ratio"] >= 0
     assert report["tick_error_m"]["panda_pose"] <= FINAL_ERROR
     assert report["tick_quality"]["panda_pose"]["max_position_error_m"] <= 1e-5
     assert report["tick_quality"]["panda_pose"]["velocity_ratio"] <= 1.0 + 1e-9
+    # Several tasks per tick: the hands and feet where the references put them, every tick ok.
+    dual_arm, humanoid = report["tick_quality"]["dual_arm"], report["tick_quality"]["humanoid"]
+    assert dual_arm["max_position_error_m"] <= 1e-5 and humanoid["com_error_m"] <= 1e-5
+    assert humanoid["max_error_m.hand"] <= 1e-4
+    assert max(humanoid["max_error_m.left_foot"], humanoid["max_error_m.right_foot"]) <= 1e-5
+    for name in WHOLE_BODY:
+        assert report["ticks"][name]["ticks_not_ok"] == 0, name
+        assert report["tick_quality"][name]["velocity_ratio"] <= 1.0 + 1e-9, name
     # The avoiding lines stay out of the spheres (the Panda starts 0.028 m from one).
     for name in ("panda_pose_obstacles", "pink_panda_pose_obstacles", "mink_panda_pose_obstacles"):
         quality = report["tick_quality"][name]
@@ -148,7 +160,7 @@ def test_missing_peers_are_skipped_with_a_message(quick, monkeypatch, tmp_path):
         for name in lines:
             assert name not in report["ticks"]
             assert report["tick_us"][name] is None and report["tick_quality"][name] is None
-    assert set(report["ticks"]) == {"panda_pose", "panda_pose_obstacles"}
+    assert set(report["ticks"]) == {"panda_pose", "panda_pose_obstacles", *WHOLE_BODY}
     text = Path(tmp_path / "bench.md").read_text()
     assert "Skipped: pink's tick lines (pink not installed" in text
     assert "Skipped: mink's tick lines (mink or mujoco not installed" in text

@@ -71,8 +71,9 @@ def test_the_engines_agree(scene: WholeBody) -> None:
     np.testing.assert_allclose(compiled, python, rtol=0, atol=1e-9)
 
 
-def test_a_held_joint_takes_the_general_form(scene: WholeBody) -> None:
-    """A start on a joint's range (its row active from the first tick) runs as well."""
+def test_a_joint_held_at_its_range(scene: WholeBody) -> None:
+    """A start near a joint's limit: its range row active from the first tick, the engines
+    agree while it holds the joint and after it lets go."""
     q0 = scene.q0.copy()
     model = scene.robot.model
     joint = model.joints[model.njoints - 1]
@@ -87,7 +88,7 @@ def test_a_held_joint_takes_the_general_form(scene: WholeBody) -> None:
         for k in range(200):
             tick = ctl.step(scene.targets[k], scene.velocities[k])
             assert tick.verdict == "ok", tick.reason
-            assert tick.active, "the joint's range row is active"
+            assert tick.active or k > 0, "the joint's range row is active at the start"
             qs.append(tick.q)
         runs.append(np.array(qs))
     np.testing.assert_allclose(runs[0], runs[1], rtol=0, atol=1e-9)

@@ -138,11 +138,16 @@ class Law {
   bool orthonormal_rows(const double* M, int n, const int* lo, const int* hi, double* L);
   // Two levels, the second of unit rows (a posture: loop/unit_level.cpp): without Z.
   bool projected_levels(const ExtendedTask& ext, int v, double& blocked);
-  void project_free(const double* M1, int n1, int f, const double* L, double* x);
+  void project_free(const double* M1, int n1, int f, const double* L, const double* inv,
+                    double* x);
+  bool regular_level(const double* A, int n, double floor, double d2, double* S);
+  Eigen::MatrixXd A1_;        // level 1's Gram matrix at the previous sample (n1, n1)
+  double certified_ = -1.0;   // a lower bound on its smallest eigenvalue (< 0: none)
+  double margin_ = 0.0;       // the shift the next certificate tries (0: from the pivots)
   bool unit_plan_ = false;  // two levels, no objective, the second's rows one column each
   std::vector<int> fpos_, fcols_, epos_;  // F: each column's place (-1: held), its columns; E
   std::vector<char> hit_;  // a free column the second level's rows reach
-  Mat M1_, Pe_;            // level 1 on F (n1, f); L^-1 of its E columns (n1, e)
+  Mat M1_, Pe_;            // level 1 on F (n1, f); L^-1 of its E columns, by rows (e, n1)
   Eigen::MatrixXd H_, Hs_;  // P^T P (e, e); its factor, and room for another
   Vec u_, g_, t_, s1_;     // F vectors (nv); level 1's (n1)
   bool q_ready_ = false;  // solve_rows left the level's Q in P_ (remove_rows uses it)

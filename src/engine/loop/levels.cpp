@@ -69,7 +69,8 @@ Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& 
   epos_.assign(static_cast<size_t>(nv), 0);
   hit_.assign(static_cast<size_t>(nv), 0);
   M1_.setZero(n1, nv);
-  Pe_.setZero(n1, nv);
+  A1_.setZero(n1, n1);
+  Pe_.setZero(nv, nv);
   H_.setZero(nv, nv);
   Hs_.setZero(nv, 2 * nv);  // the factor, and a scratch factor
   u_.setZero(nv);

@@ -138,7 +138,7 @@ void TrackingRun::kinematics(const Vec& q) {
     return;
   }
   pinocchio::computeJointJacobians(model_, data_, q);
-  if (goals_.needs_com()) pinocchio::jacobianCenterOfMass(model_, data_, q);
+  if (goals_.needs_com()) com_jacobian(model_, data_);  // from computeJointJacobians' data
   pinocchio::updateFramePlacement(model_, data_, task_.frame);
   for (int f : goals_.frames()) {
     pinocchio::updateFramePlacement(model_, data_, static_cast<pinocchio::FrameIndex>(f));

@@ -16,6 +16,7 @@
 // general form runs.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "loop/laws.hpp"
 #include "loop/regular_factor.hpp"
@@ -38,24 +39,20 @@ int unit_column(const double* row, int n, double& sign) {
   return col;
 }
 
-// Z = L^-1 Z in place for the e columns of Z (n x e, row i at Z + i * ld; L lower, n x n,
-// column j at L + j * n, inv its diagonal's inverses): row j scaled, then taken from the
-// rows below it.
-void forward_rows(const double* L, const double* inv, int n, double* Z, int ld, int e) {
+// x = L^-1 x in place (L lower, n x n, column j at L + j * n; inv its diagonal's
+// inverses), column by column.
+void forward(const double* L, const double* inv, int n, double* x) {
   for (int j = 0; j < n; ++j) {
-    double* zj = Z + j * ld;
-    small::scale(inv[j], zj, e);
-    const double* col = L + j * n;
-    for (int i = j + 1; i < n; ++i) {
-      if (col[i] != 0.0) small::sub_scaled(col[i], zj, Z + i * ld, e);
-    }
+    x[j] *= inv[j];
+    small::sub_scaled(x[j], L + j * n + j + 1, x + j + 1, n - j - 1);
   }
 }
 
 }  // namespace
 
-// x = N1 x (f values): x - M1^T (L L^T)^-1 M1 x.
-void Law::project_free(const double* M1, int n1, int f, const double* L, double* x) {
+// x = N1 x (f values): x - M1^T (L L^T)^-1 M1 x (inv: L's diagonal's inverses).
+void Law::project_free(const double* M1, int n1, int f, const double* L, const double* inv,
+                       double* x) {
   const int nv = static_cast<int>(u_.size());
   double* y = s1_.data();
   const Level& lv = level_[0];
@@ -63,8 +60,53 @@ void Law::project_free(const double* M1, int n1, int f, const double* L, double*
     const int lo = lv.lo[i], hi = lv.hi[i];
     y[i] = lo < hi ? small::dot(M1 + i * nv + lo, x + lo, hi - lo) : 0.0;
   }
-  small::cholesky_solve(L, n1, n1, y);
+  forward(L, inv, n1, y);
+  for (int j = n1 - 1; j >= 0; --j) {  // L^T y = y: row j of L^T is column j of L
+    y[j] = (y[j] - small::dot(L + j * n1 + j + 1, y + j + 1, n1 - j - 1)) * inv[j];
+  }
   small::sub_rows(y, M1, nv, n1, x, f);
+}
+
+// S = the factor of A + d2 I (n x n) when A's eigenvalues clear the floor. The test is
+// carried from sample to sample: a factorisation of A - c I (c >= floor) shows
+// lambda_min(A) > c, and by Weyl's inequality lambda_min moves by at most |A - A_prev|_F
+// from one sample to the next, so while c less the drift since (and the rounding of
+// factor_regular's bound) clears the floor, A + d2 I's factorisation alone does.
+// c is a quarter of the smallest pivot when that factorises (a margin), else the floor.
+bool Law::regular_level(const double* A, int n, double floor, double d2, double* S) {
+  double* before = A1_.data();
+  double drift = 0.0, top = 0.0;
+  for (int i = 0; i < n * n; ++i) {
+    const double d = A[i] - before[i];
+    drift += d * d;
+    before[i] = A[i];
+  }
+  for (int j = 0; j < n; ++j) top = std::max(top, A[j * n + j] + d2);
+  const double rounding = 2.0 * (n + 1) * n * std::numeric_limits<double>::epsilon() * top;
+  certified_ -= std::sqrt(drift);
+  if (!factor_shifted(A, n, n, d2, S, n)) {
+    certified_ = -1.0;
+    return false;
+  }
+  if (certified_ - rounding > floor) return true;
+  // a margin: try c between the floor and the smallest pivot (an upper bound on
+  // lambda_min), where the last try succeeded or halfway (geometrically) below a failure
+  double pivot = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < n; ++j) pivot = std::min(pivot, S[j * n + j] * S[j * n + j] - d2);
+  double* scratch = Hs_.data();
+  const double c = std::min(margin_ > 0.0 ? margin_ : 0.5 * pivot, 0.5 * pivot);
+  if (c > floor && factor_shifted(A, n, n, -c, scratch, n)) {
+    certified_ = c;
+    margin_ = std::min(2.0 * c, 0.5 * pivot);
+    return true;
+  }
+  margin_ = c > floor ? std::sqrt(c * floor) : 0.0;
+  if (!factor_shifted(A, n, n, -floor, scratch, n)) {
+    certified_ = -1.0;
+    return false;
+  }
+  certified_ = floor;
+  return true;
 }
 
 bool Law::projected_levels(const ExtendedTask& ext, int v, double& blocked) {
@@ -121,10 +163,7 @@ bool Law::projected_levels(const ExtendedTask& ext, int v, double& blocked) {
   const double eps2 = std::pow(CONDITION_RATIO * scale1, 2);
   const double floor1 = std::max(eps2, std::max(keep * keep, GRAM_TOLERANCE * scale1 * scale1));
   small::gram_rows(M1, nv, n1, f, l1.A.data(), n1, l1.lo.data(), l1.hi.data());
-  if (!factor_regular(l1.A.data(), n1, n1, floor1, d2, l1.S.data(), n1, l1.work.data(),
-                      Hs_.data())) {
-    return false;
-  }
+  if (!regular_level(l1.A.data(), n1, floor1, d2, l1.S.data())) return false;
   l1.y = l1.rest;
   small::cholesky_solve(l1.S.data(), n1, n1, l1.y.data());
   double* x = g_.data();
@@ -133,6 +172,8 @@ bool Law::projected_levels(const ExtendedTask& ext, int v, double& blocked) {
   for (int p = 0; p < f; ++p) part1[fcols_[p]] = x[p];
   if (d2 > 0.0 && !factor_shifted(l1.A.data(), n1, n1, 0.0, l1.S.data(), n1)) return false;
   const double* L = l1.S.data();  // M1 M1^T = L L^T
+  double* inv = s1_.data() + nv;  // its diagonal's inverses
+  for (int i = 0; i < n1; ++i) inv[i] = 1.0 / L[i * n1 + i];
   // level 2: u = S'^T rest, g = N1 u
   Level& l2 = level_[1];
   std::fill(hit_.begin(), hit_.begin() + f, 0);
@@ -154,39 +195,41 @@ bool Law::projected_levels(const ExtendedTask& ext, int v, double& blocked) {
     hit_[p] = 1;
     u_[p] = ext.J(row, c) * l2.rest[i];
   }
-  double* g = g_.data();
-  std::copy(u_.data(), u_.data() + f, g);
-  project_free(M1, n1, f, L, g);
   // E: the free joints level 2 does not select; P = L^-1 M1[:, E], H = P^T P
   int e = 0;
   for (int p = 0; p < f; ++p) {
     if (!hit_[p]) epos_[e++] = p;
   }
-  double* t = t_.data();
-  std::fill(t, t + f, 0.0);
+  double* t = t_.data();  // u + E^T (P^T P + d2 I)^-1 E g, g = N1 u
+  std::copy(u_.data(), u_.data() + f, t);
   if (e > 0) {
     const double scale2 = lscale_[1];
     const double floor2 = std::pow(CONDITION_RATIO * scale2, 2);
-    double* inv = s1_.data();
+    double* z = g_.data();  // L^-1 M1 u
     for (int i = 0; i < n1; ++i) {
-      inv[i] = 1.0 / L[i * n1 + i];
-      for (int j = 0; j < e; ++j) Pe_(i, j) = M1[i * nv + epos_[j]];
+      const int lo = l1.lo[i], hi = l1.hi[i];
+      z[i] = lo < hi ? small::dot(M1 + i * nv + lo, u_.data() + lo, hi - lo) : 0.0;
     }
-    forward_rows(L, inv, n1, Pe_.data(), nv, e);
-    small::gram_columns(Pe_.data(), nv, n1, e, H_.data(), nv, s1_.data());
+    forward(L, inv, n1, z);
+    double* w = zp_.data();  // E g = u_E - P^T z, then (P^T P + d2 I)^-1 E g
+    for (int j = 0; j < e; ++j) {  // P's column j (row j of Pe_): L^-1 M1[:, E_j]
+      double* pj = Pe_.data() + j * nv;
+      for (int i = 0; i < n1; ++i) pj[i] = M1[i * nv + epos_[j]];
+      forward(L, inv, n1, pj);
+      w[j] = u_[epos_[j]] - small::dot(pj, z, n1);
+    }
+    small::gram_rows(Pe_.data(), nv, e, n1, H_.data(), nv);
     if (!factor_regular(H_.data(), nv, e, floor2, d2, Hs_.data(), nv, l2.work.data(),
                         Hs_.data() + nv * nv)) {
       return false;
     }
-    double* w = zp_.data();  // (P^T P + d2 I)^-1 E g
-    for (int j = 0; j < e; ++j) w[j] = g[epos_[j]];
     small::cholesky_solve(Hs_.data(), nv, e, w);
-    for (int j = 0; j < e; ++j) t[epos_[j]] = w[j];
-    project_free(M1, n1, f, L, t);
+    for (int j = 0; j < e; ++j) t[epos_[j]] += w[j];
   }
+  project_free(M1, n1, f, L, inv, t);
   Eigen::Map<Vec> part2(parts_.row(2).data(), nv);
   const double a = 1.0 / (1.0 + d2);
-  for (int p = 0; p < f; ++p) part2[fcols_[p]] = a * (g[p] + t[p]);
+  for (int p = 0; p < f; ++p) part2[fcols_[p]] = a * t[p];
   budget(part2, s_.dt);
   out_ += part2;
   return true;

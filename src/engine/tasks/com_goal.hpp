@@ -12,6 +12,13 @@ namespace clik {
 
 class ComGoalRun;
 
+// The centre of mass c (data.com[0]) and its Jacobian (data.Jcom, 3 x nv, world axes)
+// from the joint placements and world Jacobians computeJointJacobians leaves in data:
+// joint j's columns are (m_j J_v + J_w x s_j) / M, m_j and s_j its subtree's mass and
+// mass-weighted centre (data.mass[j], data.com[j] m_j). pinocchio::jacobianCenterOfMass's
+// figures without its second forward pass.
+void com_jacobian(const pinocchio::Model& model, pinocchio::Data& data);
+
 // `_engine.ComGoal`: rows among 0..2. Reference: c_d (3) [m]; feed-forward: its rows'.
 struct ComGoal {
   using Run = ComGoalRun;
