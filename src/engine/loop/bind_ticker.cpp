@@ -314,20 +314,22 @@ struct PyTicker {
     out.reason = no_reason;
     out.task_names = task_names;
     out.constraint_names = constraint_names;
+    const Mat& goals = r.goal_last();
+    out.errors.reserve(static_cast<std::size_t>(2 + 2 * goals.rows()));
     out.errors.push_back(r.last_error());
     out.errors.push_back(r.last_orientation_error());
-    const Mat& goals = r.goal_last();
     for (Eigen::Index g = 0; g < goals.rows(); ++g) {
       out.errors.push_back(goals(g, 0));
       out.errors.push_back(goals(g, 1));
     }
     if (const ConstraintRun* c = run->constraints.get()) {
       out.events = c->sample_events();
+      out.active.reserve(c->active().size());
       for (const Candidate& cand : c->active()) out.active.push_back(cand.key);
     }
-    for (Eigen::Index j = 0; j < q.size(); ++j) out.q.push_back(q[j]);
+    out.q.assign(q.data(), static_cast<std::size_t>(q.size()));
     const Vec& qdot = r.qdot();
-    for (Eigen::Index j = 0; j < qdot.size(); ++j) out.qdot.push_back(qdot[j]);
+    out.qdot.assign(qdot.data(), static_cast<std::size_t>(qdot.size()));
     wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (out.code != ok) {  // its reason, in Python (nothing of the engine held)
       nb::object reason = explain(tick, stop_tuple(), above_since);

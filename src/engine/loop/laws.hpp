@@ -147,7 +147,7 @@ class Law {
   bool unit_plan_ = false;  // two levels, no objective, the second's rows one column each
   std::vector<int> fpos_, fcols_, epos_;  // F: each column's place (-1: held), its columns; E
   std::vector<char> hit_;  // a free column the second level's rows reach
-  Mat M1_, Pe_;            // level 1 on F (n1, f); L^-1 of its E columns, by rows (e, n1)
+  Mat M1_, Pe_;  // level 1 on F (n1, f); L^-1 [M1[:, E], M1 u] (n1 rows of e + 1 values)
   Eigen::MatrixXd H_, Hs_;  // P^T P (e, e); its factor, and room for another
   Vec u_, g_, t_, s1_;     // F vectors (nv); level 1's (n1)
   bool q_ready_ = false;  // solve_rows left the level's Q in P_ (remove_rows uses it)

@@ -70,7 +70,7 @@ Law::Law(const LawSettings& settings, int rows, int nv, int m, const LevelPlan& 
   hit_.assign(static_cast<size_t>(nv), 0);
   M1_.setZero(n1, nv);
   A1_.setZero(n1, n1);
-  Pe_.setZero(nv, nv);
+  Pe_.setZero(nv + 2, nv + 2);  // L^-1 [M1[:, E], M1 u]: n1 rows of e + 1 (even) values
   H_.setZero(nv, nv);
   Hs_.setZero(nv, 2 * nv);  // the factor, and a scratch factor
   u_.setZero(nv);

@@ -6,6 +6,7 @@
 // controller does meanwhile.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <vector>
@@ -22,22 +23,46 @@ template <typename T, std::size_t N>
 class Small {
  public:
   void push_back(T v) {
-    if (n_ < N) {
-      in_place_[n_] = v;
-    } else {
-      if (n_ == N) more_.assign(in_place_.begin(), in_place_.end());
-      more_.push_back(v);
+    if (!heap_ && n_ < N) {
+      in_place_[n_++] = v;
+      return;
     }
+    to_heap(n_ + 1);
+    more_.push_back(v);
     ++n_;
+  }
+  // Room for n values: pushing up to n allocates once at most.
+  void reserve(std::size_t n) {
+    if (n > N) to_heap(n);
+  }
+  // The n values at p, replacing any: one allocation at most.
+  void assign(const T* p, std::size_t n) {
+    n_ = n;
+    if (!heap_ && n <= N) {
+      std::copy(p, p + n, in_place_.begin());
+    } else {
+      more_.assign(p, p + n);
+      heap_ = true;
+    }
   }
   std::size_t size() const { return n_; }
   T operator[](std::size_t i) const { return data()[i]; }
-  const T* data() const { return n_ <= N ? in_place_.data() : more_.data(); }
+  const T* data() const { return heap_ ? more_.data() : in_place_.data(); }
 
  private:
-  std::array<T, N> in_place_;  // the first n_ set
-  std::vector<T> more_;  // every value, once there are more than N
+  void to_heap(std::size_t n) {
+    if (heap_) {
+      more_.reserve(n);
+      return;
+    }
+    more_.reserve(std::max(n, 2 * N));
+    more_.assign(in_place_.begin(), in_place_.begin() + static_cast<std::ptrdiff_t>(n_));
+    heap_ = true;
+  }
+  std::array<T, N> in_place_;  // the first n_ set (until heap_)
+  std::vector<T> more_;        // every value, once heap_
   std::size_t n_ = 0;
+  bool heap_ = false;
 };
 
 // Joints of up to JOINTS_IN_PLACE values are kept in the tick itself (an arm's); a tick

@@ -48,6 +48,18 @@ void forward(const double* L, const double* inv, int n, double* x) {
   }
 }
 
+// Y = L^-1 Y in place for the n rows of Y (each of ld values, leading dimension ld): row
+// i is (Y_i - sum_{t<i} L(i, t) Y_t) / L(i, i), the earlier rows combined four at a time.
+// a holds n values.
+void forward_rows(const double* L, const double* inv, int n, double* Y, int ld, double* a) {
+  for (int i = 0; i < n; ++i) {
+    for (int t = 0; t < i; ++t) a[t] = L[t * n + i];
+    double* row = Y + i * ld;
+    small::sub_rows(a, Y, ld, i, row, ld);
+    small::scale(inv[i], row, ld);
+  }
+}
+
 }  // namespace
 
 // x = N1 x (f values): x - M1^T (L L^T)^-1 M1 x (inv: L's diagonal's inverses).
@@ -205,20 +217,22 @@ bool Law::projected_levels(const ExtendedTask& ext, int v, double& blocked) {
   if (e > 0) {
     const double scale2 = lscale_[1];
     const double floor2 = std::pow(CONDITION_RATIO * scale2, 2);
-    double* z = g_.data();  // L^-1 M1 u
+    // Y = L^-1 [M1[:, E], M1 u] (n1 rows of e + 1 values, leading dimension ldy): P's rows
+    // and z = L^-1 M1 u, so that Y^T Y holds H = P^T P and P^T z
+    const int ey = e + 1, ldy = (ey + 1) & ~1;
+    double* Y = Pe_.data();
     for (int i = 0; i < n1; ++i) {
+      double* row = Y + i * ldy;
+      const double* m1 = M1 + i * nv;
+      for (int j = 0; j < e; ++j) row[j] = m1[epos_[j]];
       const int lo = l1.lo[i], hi = l1.hi[i];
-      z[i] = lo < hi ? small::dot(M1 + i * nv + lo, u_.data() + lo, hi - lo) : 0.0;
+      row[e] = lo < hi ? small::dot(m1 + lo, u_.data() + lo, hi - lo) : 0.0;
+      if (ey < ldy) row[ey] = 0.0;
     }
-    forward(L, inv, n1, z);
+    forward_rows(L, inv, n1, Y, ldy, g_.data());
+    small::gram_columns(Y, ldy, n1, ey, H_.data(), nv, s1_.data());
     double* w = zp_.data();  // E g = u_E - P^T z, then (P^T P + d2 I)^-1 E g
-    for (int j = 0; j < e; ++j) {  // P's column j (row j of Pe_): L^-1 M1[:, E_j]
-      double* pj = Pe_.data() + j * nv;
-      for (int i = 0; i < n1; ++i) pj[i] = M1[i * nv + epos_[j]];
-      forward(L, inv, n1, pj);
-      w[j] = u_[epos_[j]] - small::dot(pj, z, n1);
-    }
-    small::gram_rows(Pe_.data(), nv, e, n1, H_.data(), nv);
+    for (int j = 0; j < e; ++j) w[j] = u_[epos_[j]] - H_(e, j);
     if (!factor_regular(H_.data(), nv, e, floor2, d2, Hs_.data(), nv, l2.work.data(),
                         Hs_.data() + nv * nv)) {
       return false;
