@@ -26,7 +26,6 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-from lxml import etree
 
 from benchmarks.config import DT
 from benchmarks.mink_backend import Mink
@@ -167,12 +166,7 @@ def pink_variant(pink: Pink, scene: WholeBody) -> TickVariant:
 
 def _mujoco_model(mj: Mink, scene: WholeBody) -> Any:
     """The scene's URDF compiled by MuJoCo (a free joint on a floating base)."""
-    root = etree.fromstring(mujoco_urdf(scene.robot).encode())
-    for collision in list(root.iter("collision")):
-        mesh = collision.find("geometry/mesh")
-        if mesh is not None and not mesh.get("filename", "").lower().endswith((".stl", ".obj")):
-            collision.getparent().remove(collision)
-    spec = mj.mujoco.MjSpec.from_string(etree.tostring(root, encoding="unicode"))
+    spec = mj.mujoco.MjSpec.from_string(mujoco_urdf(scene.robot))
     if scene.robot.base == "floating":
         spec.worldbody.first_body().add_freejoint()
     return spec.compile()
