@@ -1,6 +1,7 @@
 # clik: the two commands of the README, and a few more.
 #   make demo   creates .venv, installs clik, runs the case study (out/demo)
 #   make test   creates .venv with the test extras, runs every test and notebook
+#   make test-ros  adds the ros extra (ROS 2 wheels, rosbags) and runs the tests that need it
 #   make lint   ruff (style, docstrings) and mypy (types) on clik/ and benchmarks/
 #   make bench  installs the bench extra (pink, mink, MuJoCo), runs benchmarks/ into out/bench
 #   make docs   the documentation site (MkDocs, mkdocs.yml), built strictly into site/
@@ -27,7 +28,7 @@ logged = mkdir -p $(dir $(LOG)) && { $(1); } >>$(LOG) 2>&1 || { echo "clik: fail
 NEED_CXX = command -v c++ >/dev/null 2>&1 || { echo "clik compiles its engine (C++17): no C++ compiler found; install one (Debian/Ubuntu: sudo apt-get install g++)" >&2; exit 1; }
 COMPILE_MSG = compiling the engine (the first time about 5-9 min on 2 cores, peak about 2.5 GB of memory; log: $(LOG))...
 
-.PHONY: demo test lint docs bench sanitize clean
+.PHONY: demo test test-ros lint docs bench sanitize clean
 
 VENV_NEW = test -x $(PY) || { $(PYTHON) -m venv $(VENV) && $(PIP) install --upgrade pip; }
 
@@ -63,6 +64,15 @@ demo: $(VENV)/.installed
 test: $(VENV)/.installed-test
 	@echo "clik: 3/3 running the tests ($(PY) -m pytest tests ...)"
 	$(PY) -m pytest tests $(if $(NOTEBOOKS),--nbmake --nbmake-timeout=120 $(NOTEBOOKS)) --timeout=600 -q
+
+# The ros extra (rclpy and the ROS 2 message wheels from PyPI, rosbags) into $(VENV), then
+# the tests that need it: the ROS 2 loop (tests/ros: in a private network namespace, as
+# root) and the rosbag export. (The message wheels bring lark-parser 0.12, whose files
+# replace lark's; lark is put back, as jsonschema's format checks import it.)
+test-ros: $(VENV)/.installed-test
+	@echo "clik: installing the ros extra into $(VENV) (log: $(LOG))..."
+	@$(call logged,$(call REQUIREMENTS,ros) > $(VENV)/requirements-ros.txt && $(PIP) install -r $(VENV)/requirements-ros.txt && $(PIP) install --force-reinstall --no-deps "lark>=1.2")
+	$(PY) -m pytest tests/ros tests/outputs/test_export_rosbag.py --timeout=600 -q -rs
 
 lint: $(VENV)/.installed-test
 	$(VENV)/bin/ruff check clik benchmarks tests

@@ -1,11 +1,12 @@
-"""The ``clik`` command line: solve, demo, show, robots, sweep, reach, simulate and bench.
+"""The ``clik`` command line: solve, demo, show, robots, sweep, reach, simulate, ros and bench.
 
 Errors are printed without a traceback (``--debug`` shows it) and the exit
 code tells the kind: 0 success, 1 a sweep with failed runs (``clik sweep``:
 a run raised, or ended ``violated``, ``velocity_limit``, ``off_track`` or
 ``diverged``; every row is still written), 2 bad input, 3 infeasible (the run ended
 ``violated``, ``velocity_limit``, ``off_track``, ``deadlock`` or ``diverged``; its
-outputs are still written; ``clik simulate``: the replayed robot touches an obstacle), 4 internal; 130 after Ctrl-C, 143 after SIGTERM (the output folder is
+outputs are still written; ``clik simulate``: the replayed robot touches an obstacle),
+4 internal; 130 after Ctrl-C, 143 after SIGTERM (the output folder is
 then left as it was: :mod:`clik.outputs.out_folder`), 141 when stdout is closed early
 (``clik robots | head -1``: quietly, like a process stopped by SIGPIPE).
 """
@@ -20,6 +21,7 @@ from collections.abc import Sequence
 from clik.commands.bench import add_bench
 from clik.commands.launch import add_demo, add_robots, add_show
 from clik.commands.reach import add_reach
+from clik.commands.ros import add_ros
 from clik.commands.simulate import add_simulate
 from clik.commands.solve import add_solve
 from clik.commands.sweep import add_sweep
@@ -43,6 +45,7 @@ def parser() -> argparse.ArgumentParser:
     add_sweep(sub)
     add_reach(sub)
     add_simulate(sub)
+    add_ros(sub)
     return p
 
 

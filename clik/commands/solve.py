@@ -16,10 +16,17 @@ from typing import TYPE_CHECKING, Any
 from tqdm import tqdm
 
 from clik.errors import EXIT_CODES, InputError
-from clik.outputs.export import FORMATS, check_exportable
+from clik.outputs.export import check_exportable
 from clik.outputs.io import output_errors
 from clik.outputs.out_folder import output_folder
 from clik.outputs.result import FAILED_STATUSES, TrackingResult, write_outputs
+from clik.outputs.rosbag_export import (
+    BAG_FORMAT,
+    BAG_NAME,
+    EXPORT_CHOICES,
+    check_rosbags,
+    export_rosbag,
+)
 
 if TYPE_CHECKING:
     from clik.tasks.goal import Goal
@@ -118,6 +125,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     Export options are checked before the run and before the output folder is touched.
     """
     from clik.scenarios.runner import build
+    from clik.tasks.goal import Goal
 
     if args.export_every is not None and not args.export:
         raise InputError("--export-every", "to be given with --export", args.export_every)
@@ -126,12 +134,15 @@ def cmd_solve(args: argparse.Namespace) -> int:
         run.tracker.engine = args.engine
     if args.export:
         check_exportable(run.robot.model)
+    if args.export and BAG_FORMAT in args.export:
+        check_rosbags()  # before the run: without rosbags, say how to get it
     out = Path(args.out)
     with output_folder(out, args.force) as work:
         result = run.execute(ProgressBar(run.scenario.name, None if not args.quiet else False))
         with output_errors(out):
             summary = write_outputs(result, work)
-            written = write_extras(args, result, work, run.scenario.name, run.goals)
+            targets = run.goals or [Goal(run.task, run.trajectory, name="task")]
+            written = write_extras(args, result, work, run.scenario.name, run.goals, targets)
     extras = [out / p.relative_to(work) for p in written]
     if not args.quiet:
         print_summary(run.scenario.name, summary)
@@ -171,16 +182,22 @@ def scenario_file(text: str | Path) -> Path:
 
 def write_extras(
     args: argparse.Namespace, result: TrackingResult, out: Path, name: str,
-    goals: Sequence[Goal] = (),
+    goals: Sequence[Goal] = (), targets: Sequence[Goal] | None = None,
 ) -> list[Path]:  # fmt: skip
     """``--export``, ``--html`` and ``--plots`` of ``clik solve``; the exported files.
 
     ``goals``: a several-task scenario's tasks, whose references and trails the view draws.
+    ``targets``: the run's tasks (its goals, or its one task as a goal), for a bag's
+    target topics (:func:`clik.outputs.rosbag_export.export_rosbag`).
     """
     written: list[Path] = []
     if args.export:
         every = 1 if args.export_every is None else args.export_every
-        written += result.export(out, args.export, every).values()
+        files = [f for f in args.export if f != BAG_FORMAT]
+        if files:
+            written += result.export(out, files, every).values()
+        if BAG_FORMAT in args.export:
+            written.append(export_rosbag(result, out, every, goals=targets))
     if args.html:
         from clik.viz import export_html
 
@@ -241,10 +258,12 @@ def add_solve(sub: Any) -> None:
         "--export",
         action="extend",  # repeatable: --export csv --export json is --export csv json
         nargs="+",
-        choices=FORMATS,
+        choices=EXPORT_CHOICES,
         metavar="FORMAT",
         help="also write the joint trajectory for a controller: csv (DIR/trajectory.csv), "
-        "json (DIR/trajectory.json, a ROS JointTrajectory), or both (repeatable)",
+        "json (DIR/trajectory.json, a ROS JointTrajectory), rosbag (DIR/"
+        f"{BAG_NAME}/, a ROS 2 MCAP bag of joint states, commands and task targets; "
+        "pip install 'clik[ros]'), or several (repeatable)",
     )
     s.add_argument(
         "--export-every",

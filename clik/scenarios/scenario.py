@@ -42,6 +42,7 @@ from clik.errors import ScenarioError
 from clik.model.base import BASES, FIXED, check_base_speed
 from clik.model.joints import JointValues
 from clik.model.xacro_expand import is_xacro
+from clik.ros.settings import ros_table
 from clik.scenarios.fields import gain_value
 from clik.scenarios.speed_tables import joint_speed_table, velocity_limits_table
 from clik.scenarios.task_tables import finish_tasks, primary, read_objectives, read_tasks
@@ -105,6 +106,8 @@ class Scenario:
     With ``[[tasks]]``, ``task`` and ``trajectory`` are the primary task's."""
     objectives: list[dict[str, Any]] = field(default_factory=list)
     """The ``[[objectives]]`` tables (eq. (5), law (10))."""
+    ros: dict[str, Any] = field(default_factory=dict)
+    """The ``[ros]`` table (:func:`clik.ros.settings.ros_table`): read by ``clik ros``."""
     raw: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
@@ -187,11 +190,12 @@ def parse_scenario(data: dict[str, Any], file: str | Path) -> Scenario:
             file, "constraints.velocity_limits.enabled", "false with [[tasks]] (re-timing "
             "slows one trajectory; several tasks have several)",
         )  # fmt: skip
+    ros = ros_table(top.table("ros"))
     top.done()
     return Scenario(
         file, name, robot, initial_q, task, trajectory, solver, obstacles, constraints,
         velocity_limits=velocity_limits, joint_speed=joint_speed, tasks=tasks,
-        objectives=objectives, raw=data,
+        objectives=objectives, ros=ros, raw=data,
     )  # fmt: skip
 
 

@@ -26,6 +26,7 @@ import pinocchio as pin
 from lxml import etree
 
 from clik.errors import InputError
+from clik.model.joint_order import JointOrder
 from clik.model.robot import Robot
 
 PACKAGE_PREFIX = "package://"
@@ -41,46 +42,16 @@ class MujocoRobot:
 
     Attributes:
         spec: The ``mujoco.MjSpec`` (not compiled: servos and obstacles are added to it).
-        joints: clik's joint names, in clik's velocity order (one degree of freedom each).
-        idx_q: Each joint's first entry in clik's ``q``.
-        idx_v: Each joint's entry in clik's ``qdot``.
-        angle_pairs: Each joint's ``q`` form: False for one value, True for an unbounded
-            revolute joint's (cos, sin) pair.
+        joints: clik's joints, one value each (:class:`~clik.model.joint_order.JointOrder`).
         dropped: Collision meshes MuJoCo cannot read, left out (file names).
         pads: Geoms of radius 0 (segments, points) given :data:`POINT_RADIUS` for
             MuJoCo, by name: their distances get it back.
     """
 
     spec: Any
-    joints: list[str]
-    idx_q: np.ndarray
-    idx_v: np.ndarray
-    angle_pairs: np.ndarray
+    joints: JointOrder
     dropped: list[str] = field(default_factory=list)
     pads: dict[str, float] = field(default_factory=dict)
-
-    def angles(self, q: np.ndarray) -> np.ndarray:
-        """Joint values [rad or m] (N, n) from clik's configurations (N, nq), unwrapped in time.
-
-        Args:
-            q: Configurations, one per row.
-        """
-        q = np.atleast_2d(q)
-        out = q[:, self.idx_q].copy()
-        for j in np.flatnonzero(self.angle_pairs):
-            i = self.idx_q[j]
-            out[:, j] = np.unwrap(np.arctan2(q[:, i + 1], q[:, i]))
-        return out
-
-    def configuration(self, q_base: np.ndarray, values: np.ndarray) -> np.ndarray:
-        """Clik's configuration: ``q_base`` (nq,) with the joints set to ``values`` (n,)."""
-        q = np.array(q_base, dtype=float, copy=True)
-        for j, i in enumerate(self.idx_q):
-            if self.angle_pairs[j]:
-                q[i], q[i + 1] = np.cos(values[j]), np.sin(values[j])
-            else:
-                q[i] = values[j]
-        return q
 
 
 def _floats(text: str | None, default: str) -> np.ndarray:
@@ -218,15 +189,8 @@ def mujoco_urdf(robot: Robot) -> tuple[str, list[str], list[str], list[str]]:
     return str(etree.tostring(root, encoding="unicode")), dropped, thin, capsules
 
 
-def _joint_map(robot: Robot) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
-    """Clik's joints (names, idx_q, idx_v, angle pairs); a base refused."""
-    if robot.base != "fixed":
-        raise InputError(
-            "robot.base",
-            "a fixed-base robot (the replay drives joints through position servos; a "
-            f"{robot.base} base needs contacts and a balance controller)",
-            robot.base,
-        )
+def _massless(robot: Robot) -> None:
+    """Refuse a kinematic model: links without mass cannot be simulated."""
     model = robot.model
     massless = [str(model.names[j]) for j in range(1, model.njoints) if model.inertias[j].mass <= 0]
     if massless:
@@ -236,22 +200,6 @@ def _joint_map(robot: Robot) -> tuple[list[str], np.ndarray, np.ndarray, np.ndar
             f"by {', '.join(massless)} have none: a kinematic model)",
             robot.name,
         )
-    names, iq, iv, pairs = [], [], [], []
-    for j in range(1, model.njoints):
-        joint = model.joints[j]
-        if joint.nv == 0:
-            continue
-        if joint.nv != 1 or joint.nq not in (1, 2):
-            raise InputError(
-                f"robot.joints.{model.names[j]}",
-                "one degree of freedom (revolute, continuous or prismatic)",
-                joint.shortname(),
-            )
-        names.append(str(model.names[j]))
-        iq.append(joint.idx_q)
-        iv.append(joint.idx_v)
-        pairs.append(joint.nq == 2)
-    return names, np.array(iq), np.array(iv), np.array(pairs, dtype=bool)
 
 
 def robot_spec(mujoco: Any, robot: Robot) -> MujocoRobot:
@@ -265,7 +213,11 @@ def robot_spec(mujoco: Any, robot: Robot) -> MujocoRobot:
         InputError: A base, a joint of several degrees of freedom, a file MuJoCo refuses,
             or a joint of clik's that MuJoCo's model lacks.
     """
-    names, iq, iv, pairs = _joint_map(robot)
+    joints = JointOrder.of(
+        robot, "the replay drives joints through position servos; a base needs contacts "
+        "and a balance controller",
+    )  # fmt: skip
+    _massless(robot)
     dropped: list[str] = []
     thin: list[str] = []
     capsules: list[str] = []
@@ -278,7 +230,7 @@ def robot_spec(mujoco: Any, robot: Robot) -> MujocoRobot:
     except ValueError as exc:
         raise InputError("robot", f"a model MuJoCo compiles ({exc})", robot.name) from None
     present = {j.name for j in spec.joints}
-    missing = [n for n in names if n not in present]
+    missing = [n for n in joints.names if n not in present]
     if missing:
         raise InputError(
             "robot.joints", f"joints MuJoCo's model of {robot.name} has", ", ".join(missing)
@@ -287,4 +239,4 @@ def robot_spec(mujoco: Any, robot: Robot) -> MujocoRobot:
         if geom.name and geom.name in capsules:
             geom.type = mujoco.mjtGeom.mjGEOM_CAPSULE
     pads = {name: POINT_RADIUS for name in thin if name}
-    return MujocoRobot(spec, names, iq, iv, pairs, dropped, pads)
+    return MujocoRobot(spec, joints, dropped, pads)

@@ -116,7 +116,7 @@ def _scene(mujoco: Any, mj: MujocoRobot, obstacles: list[Any], step: float) -> _
         model = spec.compile()
     except ValueError as exc:
         raise InputError("robot", f"a model MuJoCo compiles ({exc})") from None
-    ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) for n in mj.joints]
+    ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) for n in mj.joints.names]
     body_ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in bodies]
     geom_body = np.asarray(model.geom_bodyid)
     held = [int(np.flatnonzero(geom_body == b)[0]) for b in body_ids]
@@ -221,20 +221,20 @@ def simulate(
         run = _scenario_run(result, robot)
     mj = robot_spec(mujoco, robot)
     sub, step = _substeps(result.t, timestep)
-    effort = np.asarray(robot.model.effortLimit)[mj.idx_v]
-    add_servos(mujoco, mj.spec, mj.joints, kp, kv, effort)
+    effort = np.asarray(robot.model.effortLimit)[mj.joints.idx_v]
+    add_servos(mujoco, mj.spec, mj.joints.names, kp, kv, effort)
     constraints = getattr(getattr(run, "tracker", None), "constraints", None)
     obstacles = list(constraints.obstacles) if constraints is not None else []
     scene = _scene(mujoco, mj, obstacles, step)
-    angles = mj.angles(result.q)
+    angles = mj.joints.angles(result.q)
     limit = np.where(np.isfinite(effort) & (effort > 0), effort, np.inf)
     trace = _replay(mujoco, scene, result.t, angles, obstacles, sub, limit, (kp, kv, feedforward))
     q_sim = np.array(
-        [mj.configuration(qk, rk) for qk, rk in zip(result.q, trace.reached, strict=True)]
+        [mj.joints.configuration(qk, rk) for qk, rk in zip(result.q, trace.reached, strict=True)]
     )
     points = task_points(result, run)
     return Simulation(
-        t=result.t, joints=mj.joints, q_run=angles, q_sim=trace.reached,
+        t=result.t, joints=mj.joints.names, q_run=angles, q_sim=trace.reached,
         task_names=[p.name for p in points],
         errors={p.name: p.errors(robot, q_sim) for p in points},
         run_errors={p.name: p.errors(robot, result.q) for p in points},

@@ -131,7 +131,7 @@ def test_robots_a_replay_cannot_drive(planar4r: Robot) -> None:
     with pytest.raises(InputError, match=r"robot\.inertial.*joint1"):
         robot_spec(mujoco, planar4r)
     floating = Robot.load("panda", base="floating", lock=PANDA_FINGERS)
-    with pytest.raises(InputError, match=r"robot\.base.*fixed-base"):
+    with pytest.raises(InputError, match=r"robot\.base.*fixed-base robot"):
         robot_spec(mujoco, floating)
 
 
