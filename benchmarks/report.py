@@ -211,6 +211,23 @@ def targets_section(report: dict[str, Any]) -> list[str]:
     return lines
 
 
+def ros_section(report: dict[str, Any]) -> list[str]:
+    """The ROS 2 loop's line, or why it did not run."""
+    ros = report.get("ros") or {}
+    if not ros or ros.get("skipped"):
+        return ["", "## ROS 2 loop", "", f"Not run: {ros.get('skipped', 'no measurement')}."]
+    rtt = ros["rtt_ms"] or {}
+    return [
+        "",
+        "## ROS 2 loop",
+        "",
+        f"{ros['text']}: {ros['answered']} of {ros['sent']} targets answered, round trip "
+        f"{rtt.get('median', float('nan')):.3g} ms median, {rtt.get('p99', float('nan')):.3g} ms "
+        f"p99; the hand on the robot's joints {1e3 * ros['max_error_m']:.3g} mm at most from "
+        "the circle.",
+    ]
+
+
 def markdown(report: dict[str, Any]) -> str:
     """``bench.md``: the step, zoo, solve, ratio, case-study, memory and target tables.
 
@@ -225,6 +242,7 @@ def markdown(report: dict[str, Any]) -> str:
         *solve_section(report),
         *ratios_section(report),
         *case_memory_section(report),
+        *ros_section(report),
         *targets_section(report),
         "",
         "Reproduce: `clik bench --out out/bench` (or `make bench`).",

@@ -21,6 +21,7 @@ from benchmarks.memory import bench_memory
 from benchmarks.mink_backend import Mink, find_mink
 from benchmarks.pink_backend import Pink, find_pink
 from benchmarks.report import markdown
+from benchmarks.ros_line import bench_ros
 from benchmarks.session_memory import bench_session
 from benchmarks.solve import bench_solve
 from benchmarks.stats import ratio
@@ -105,6 +106,7 @@ class Measured:
         ticks: Per tick line (:func:`~benchmarks.tick.bench_ticks`).
         session: A long controller session's memory
             (:func:`~benchmarks.session_memory.bench_session`).
+        ros: The ROS 2 loop (:func:`~benchmarks.ros_line.bench_ros`).
     """
 
     steps: dict[str, Any]
@@ -115,6 +117,7 @@ class Measured:
     zoo: dict[str, Any]
     ticks: dict[str, Any]
     session: dict[str, Any]
+    ros: dict[str, Any]
 
 
 def measure(config: BenchConfig, pink: Pink | None, mink: Mink | None, say: Log) -> Measured:
@@ -142,7 +145,9 @@ def measure(config: BenchConfig, pink: Pink | None, mink: Mink | None, say: Log)
     session = bench_session(config, say)
     say("sweep on a local Dask cluster, 1 and 2 workers")
     sweep = bench_sweep(config, say)
-    return Measured(steps, solve, case, memory, sweep, zoo, ticks, session)
+    say("ROS 2 loop on loopback (a private network namespace)")
+    ros = bench_ros(config, say)
+    return Measured(steps, solve, case, memory, sweep, zoo, ticks, session, ros)
 
 
 def step_ratios(m: Measured) -> dict[str, Any]:
@@ -246,6 +251,7 @@ def figures(config: BenchConfig, m: Measured) -> dict[str, Any]:
             "2_workers": m.sweep["runs_per_s_2_workers"],
         },
         "sweep": m.sweep,
+        "ros": m.ros,
         **tick_figures(m),
     }
 

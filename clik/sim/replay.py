@@ -30,7 +30,8 @@ DISTANCE_CAP = 10.0
 """Distances [m] beyond this are not resolved (``mj_geomDistance``'s ``distmax``)."""
 
 
-def _mujoco() -> Any:
+def mujoco_module() -> Any:
+    """The ``mujoco`` module (a dependency of clik; named if it is missing)."""
     try:
         import mujoco
     except ImportError:  # pragma: no cover - a dependency of clik
@@ -93,7 +94,7 @@ def clearance(
 
 
 @dataclass
-class _Scene:
+class Scene:
     """The compiled model and what the replay reads and writes in it."""
 
     model: Any
@@ -105,7 +106,7 @@ class _Scene:
     pads: np.ndarray  # per pair, the radii given to geoms of radius 0
 
 
-def _scene(mujoco: Any, mj: MujocoRobot, obstacles: list[Any], step: float) -> _Scene:
+def compiled_scene(mujoco: Any, mj: MujocoRobot, obstacles: list[Any], step: float) -> Scene:
     """The robot with its servos (added before) and the obstacles, compiled."""
     spec = mj.spec
     spec.option.timestep = step
@@ -132,7 +133,7 @@ def _scene(mujoco: Any, mj: MujocoRobot, obstacles: list[Any], step: float) -> _
     pads = np.array(
         [point[held.index(o)] + mj.pads.get(str(model.geom(g).name), 0.0) for g, o in pairs]
     )
-    return _Scene(
+    return Scene(
         model, mujoco.MjData(model), np.array([model.jnt_qposadr[i] for i in ids]),
         np.array([model.jnt_dofadr[i] for i in ids]),
         [int(model.body_mocapid[b]) for b in body_ids], pairs, pads,
@@ -150,7 +151,7 @@ class _Trace:
 
 
 def _replay(
-    mujoco: Any, scene: _Scene, t: np.ndarray, angles: np.ndarray, obstacles: list[Any],
+    mujoco: Any, scene: Scene, t: np.ndarray, angles: np.ndarray, obstacles: list[Any],
     sub: int, limit: np.ndarray, servo: tuple[float, float, bool],
 ) -> _Trace:  # fmt: skip
     """Step the model along the joint reference: ``sub`` steps per sample interval."""
@@ -212,7 +213,7 @@ def simulate(
         InputError: No robot, a robot MuJoCo cannot drive (a base, a multi-DoF joint, no
             masses), bad gains, or uneven sample times.
     """
-    mujoco = _mujoco()
+    mujoco = mujoco_module()
     _checked(kp, kv, timestep)
     robot = result.robot
     if robot is None:
@@ -225,7 +226,7 @@ def simulate(
     add_servos(mujoco, mj.spec, mj.joints.names, kp, kv, effort)
     constraints = getattr(getattr(run, "tracker", None), "constraints", None)
     obstacles = list(constraints.obstacles) if constraints is not None else []
-    scene = _scene(mujoco, mj, obstacles, step)
+    scene = compiled_scene(mujoco, mj, obstacles, step)
     angles = mj.joints.angles(result.q)
     limit = np.where(np.isfinite(effort) & (effort > 0), effort, np.inf)
     trace = _replay(mujoco, scene, result.t, angles, obstacles, sub, limit, (kp, kv, feedforward))

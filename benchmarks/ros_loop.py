@@ -1,9 +1,10 @@
 """A ROS 2 loop on loopback: ``clik ros``, a robot that lags, and a client (prints JSON).
 
-Run inside a private network namespace with only ``lo`` up (tests/ros/test_ros_loop.py
-makes one; never on the machine's own interfaces)::
+Run inside a private network namespace with only ``lo`` up
+(:func:`benchmarks.ros_line.run_loop` makes one, for tests/ros/test_ros_loop.py and
+``clik bench``; never on the machine's own interfaces)::
 
-    unshare -n sh -c 'ip link set lo up && exec python tests/ros/loop.py SCENARIO.toml'
+    unshare -n sh -c 'ip link set lo up && exec python benchmarks/ros_loop.py SCENARIO.toml'
 
 The robot (a node in this process) echoes the commands as joint states after ``--delay``
 ticks and a first-order lag of ``--tau`` seconds, at 1 kHz. The client sends the
@@ -56,10 +57,12 @@ class Robot:
         node.create_timer(self.dt, self.step)
 
     def on_command(self, msg: Any) -> None:
+        """A command: its point's positions become the robot's input."""
         self.command = np.array(msg.points[0].positions)
         self.commands += 1
 
     def step(self) -> None:
+        """One millisecond: the delayed command, through the lag; the joint state out."""
         self.queue.append(self.command)
         target = self.queue[0]
         self.q = self.q + (target - self.q) * (self.dt / (self.tau + self.dt))
@@ -98,6 +101,7 @@ def _pose(position: np.ndarray, rotation: np.ndarray, stamp: Any) -> PoseStamped
 
 
 def main() -> int:
+    """The client (or, with ``--robot``, the robot); prints the loop's JSON."""
     a = argparse.ArgumentParser()
     a.add_argument("scenario")
     a.add_argument("--targets", type=int, default=2000)
@@ -159,6 +163,8 @@ def main() -> int:
     dt = run.scenario.solver["dt"]
     t = np.arange(args.targets) * dt
     ref = run.trajectory.sample(t)
+    assert ref.position is not None and ref.rotation is not None  # a pose task's circle
+    assert ref.linear_velocity is not None and ref.angular_velocity is not None
     data = robot_model.model.createData()
     rtt, errors, refused_at = [], [], args.targets // 2
     sent = 0
