@@ -125,6 +125,11 @@ def test_a_lagging_robot_tracks_the_panda_circle(engine: str) -> None:
     np.testing.assert_array_equal(result.extra["q_commanded"], commanded)
     assert np.isfinite(result.extra["qdot_measured"]).all()
     assert result.info["measurement_jumps"] == 0
+    # the commanded joints within the ranges too, the robot's speeds within its limits
+    lower, upper = run.robot.lower - 1e-9, run.robot.upper + 1e-9
+    assert np.all((commanded >= lower) & (commanded <= upper))
+    vmax = np.asarray(run.robot.model.velocityLimit)
+    assert np.all(np.abs(result.extra["qdot_measured"]) <= vmax)
     # the loop is closed: the commanded joints run ahead of the lagging robot
     assert np.abs(result.extra["q_commanded"] - result.extra["q_measured"]).max() > 1e-4
 
@@ -230,8 +235,10 @@ def test_bad_measurements_are_refused_by_name(engine: str) -> None:
     assert ctl.k == 0  # nothing ran
     # other forms are converted once, as a target is: the same tick as float64
     ticks = []
-    for form in (q.astype(np.float32).astype(float), list(q.astype(np.float32)),
-                 q.astype(np.float32)):  # fmt: skip
+    q32 = q.astype(np.float32).astype(float)
+    strided = np.zeros(14)
+    strided[::2] = q32
+    for form in (q32, list(q32), q32.astype(np.float32), q32.astype(">f8"), strided[::2]):
         fresh = controller(run, engine)
         ticks.append(fresh.step(target, velocity, q_measured=form))
     assert all(np.array_equal(t.q, ticks[0].q) for t in ticks)
