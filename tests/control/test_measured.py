@@ -294,3 +294,21 @@ def test_the_jump_setting_is_checked() -> None:
     for bad in (0.0, -1.0, math.nan, math.inf, True, "3"):
         with pytest.raises(clik.InputError, match="measured_jump: expected a finite number > 0"):
             controller(run, "python", measured_jump=bad)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_reset_starts_the_jump_check_at_its_joints(engine: str) -> None:
+    """After ``reset(q)``, ``q`` is the accepted joints of tick 0 (M3)."""
+    run = panda_circle()
+    ctl = controller(run, engine)
+    targets, velocities = circle_targets(run, 2)
+    moved = run.q0 + 0.3  # 0.3 rad on every joint: within the Panda's ranges at q0
+    run.robot.check_within_limits(moved, "q")
+    ctl.reset(moved)
+    assert ctl.step(targets[0], velocities[0], q_measured=moved).verdict == "ok"
+    tick = ctl.step(targets[1], velocities[1], q_measured=run.q0)  # the old joints: a jump
+    assert tick.verdict == MEASUREMENT_JUMP, tick.reason
+    result = ctl.result()
+    np.testing.assert_array_equal(result.extra["q_measured"], [moved, run.q0])
+    np.testing.assert_array_equal(result.extra["q_commanded"][0], moved)
+    np.testing.assert_array_equal(result.q[1], result.extra["q_commanded"][1])  # refused
