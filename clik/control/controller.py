@@ -322,8 +322,8 @@ class Controller:
         also records, per kept tick, ``extra["q_commanded"]`` (nq, the joints the
         controller had commanded for it), ``extra["q_measured"]`` and
         ``extra["qdot_measured"]`` (NaN where none was given); ``q`` holds the joints
-        each tick ran from. Refused measurements (``measurement_jump``) are counted in
-        ``info["measurement_jumps"]`` and named in the reason.
+        each tick's law ran from. The ticks whose verdict was ``measurement_jump`` are
+        counted in ``info["measurement_jumps"]`` and in the reason.
         """
         with self._held("Controller.result"):
             session = self._session
