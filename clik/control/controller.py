@@ -5,8 +5,9 @@ tick give it each task's target (and, optionally, velocity) and command the join
 returns. Each tick runs the one sample an offline run (``clik.track``) runs, in either
 engine, and says what happened: the constraints activated or released, the rows
 active, each task's error, and a verdict (``ok``, ``deadlock``, ``violated``,
-``diverged``, ``off_track``) the caller may act on; the controller goes on after any
-of them.
+``diverged``, ``off_track``, ``measurement_jump``) the caller may act on; the controller
+goes on after any of them. Given the joints the robot reached (``q_measured``), a tick
+runs from them (docs/method.md, "Measured joints").
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import numpy as np
 
 from clik.constraints.constraint_set import ConstraintSet
 from clik.constraints.obstacle import Obstacle
+from clik.control.measured import MEASURED_JUMP, MEASUREMENT_JUMP, MeasuredJoints
 from clik.control.targets import as_floats, as_mapping
 from clik.control.tick import Tick
 from clik.control.ticks import PythonTicks, Session
@@ -31,6 +33,7 @@ from clik.loop.stop_checks import checked_settings
 from clik.loop.tracker import JOINT_SPEED, Tracker
 from clik.loop.tracking import _Run
 from clik.loop.tracking_status import DEFAULT_SETTLING_TIME, DEFAULT_TOLERANCE, checked_tolerance
+from clik.model.base import QUATERNION_TOLERANCE
 from clik.objectives.objective import Objective
 from clik.outputs.result import TrackingResult
 from clik.tasks.goal import Goal
@@ -66,6 +69,9 @@ class Controller:
             counted in the result's ``events_dropped``), an integer >= 1.
         tolerance: Position [m] and orientation [rad] tolerance of the ``off_track``
             verdict, which fires after ``settling_time`` [s] above it in one stretch.
+        measured_jump: ``c`` of eq. (M3), > 0: a ``q_measured`` further than ``c``
+            times a joint's speed limit (``model.velocityLimit``) times the time since
+            the last accepted measurement is refused (verdict ``measurement_jump``).
         **checks: The stop checks' settings, as ``Tracker.run`` takes them
             (``deadlock_window``, ``deadlock_ratio``, ``deadlock_error``,
             ``max_joint_step``, ``stall_window``, ``stall_progress``).
@@ -106,6 +112,7 @@ class Controller:
         event_size: int = EVENT_SIZE,
         tolerance: tuple[float, float] = DEFAULT_TOLERANCE,
         settling_time: float = DEFAULT_SETTLING_TIME,
+        measured_jump: float = MEASURED_JUMP,
         **checks: float,
     ) -> None:
         self.tracker = tr = Tracker(
@@ -126,6 +133,8 @@ class Controller:
         self.record_every = _count(record_every, "record_every")
         self.record_size = _count(record_size, "record_size")
         self.event_size = _count(event_size, "event_size")
+        self.measured = MeasuredJoints(self.robot, _positive(measured_jump, "measured_jump"), tr.dt)
+        """The measured joints' checks, eq. (M3), and their record."""
         self.names: list[str] = ["task"] if tr.stack is None else list(tr.stack.names)
         """The tasks' names, in order (the keys of the targets and of ``Tick.errors``)."""
         tasks_ = [tr.task] if tr.stack is None else [g.task for g in tr.stack.goals]
@@ -133,7 +142,7 @@ class Controller:
         self._turn = engine_.Turn(InputError)
         if tr.engine == "python":
             self._ticks: Any = PythonTicks(
-                self._turn, self.names, [t.tick_target() for t in tasks_]
+                self._turn, self.names, [t.tick_target() for t in tasks_], self.measured
             )
         else:
             Tick.register(engine_.Tick)  # the compiled engine's ticks are Ticks
@@ -142,7 +151,10 @@ class Controller:
                 turn=self._turn, refuse=InputError, convert=as_floats, as_mapping=as_mapping,
                 check_model=self.robot.check_model, names=self.names,
                 tol_position=tol.position, tol_orientation=tol.orientation,
-                settling_time=tol.settling_time,
+                settling_time=tol.settling_time, dt=tr.dt, jump_bound=self.measured.bound,
+                rotations=self.measured.rotations, rotation_tolerance=QUATERNION_TOLERANCE,
+                measured_words=self.measured.words,
+                measured_velocity_words=self.measured.velocity_words,
             )  # fmt: skip
         self._tick = self._ticks.step  # step's call (bound once: it runs at every tick)
         self._session: Session
@@ -178,12 +190,17 @@ class Controller:
                 self.tolerance, q0, ring=self.record_size, events=self.event_size,
             )  # fmt: skip
             if tr.engine == "python":
-                self._session = Session(run)
+                self._session = Session(run, self.measured)
                 self._ticks.restart(run, q0, self._session)
             else:
                 native = engine_run(run)
-                self._session = Session(run, native)
-                self._ticks.restart(native, np.array(q0, dtype=float), self._session.explain)
+                self._session = Session(run, self.measured, native)
+                self.measured.restart(q0, run.rec.capacity)
+                m = self.measured
+                self._ticks.restart(
+                    native, np.array(q0, dtype=float), self._session.explain,
+                    m.commanded, m.measured, m.qdot_measured,
+                )  # fmt: skip
             self._current = {}
 
     @property
@@ -227,7 +244,15 @@ class Controller:
         self._current[name] = obstacle
         self._session.move_obstacle(obstacle, obstacle.position, self._session.run.t[self.k])
 
-    def step(self, targets: Any, velocities: Any = None, obstacles: Any = None) -> Tick:
+    def step(
+        self,
+        targets: Any,
+        velocities: Any = None,
+        obstacles: Any = None,
+        *,
+        q_measured: Any = None,
+        qdot_measured: Any = None,
+    ) -> Tick:
         """One tick: this tick's targets in, the next joints and a verdict out.
 
         Args:
@@ -247,21 +272,31 @@ class Controller:
             obstacles: Obstacles that moved, by name: a position (3,) [m] (then at rest)
                 or ``(position, velocity)`` [m, m/s]; as :meth:`move_obstacle`, from this
                 tick on.
+            q_measured: The joints the robot reached (nq,) [rad or m], read at this tick:
+                the law runs from them (eq. (M1)) and the commanded joints integrate its
+                velocity, ``q = q_k (+) qdot dt`` (M2); unless they moved further than
+                ``measured_jump`` allows since the last accepted ones (M3): then the law
+                runs from the controller's own joints ``q_k`` and the verdict is
+                ``measurement_jump``. None: the law runs from ``q_k`` (the previous
+                tick's ``q``). Converted as a target is.
+            qdot_measured: The robot's joint velocities (nv,) [rad/s or m/s], with
+                ``q_measured``: recorded (the first-order law does not read them).
 
         Returns:
             The tick (:class:`~clik.control.tick.Tick`): ``q`` to command, ``qdot``,
             events, active rows, errors and the verdict; its arrays are its own.
 
         Raises:
-            InputError: A missing or malformed target, velocity or obstacle (named); the
-                robot's model changed; a call from inside another of this controller's
-                calls in the same thread (one thread at a time).
+            InputError: A missing or malformed target, velocity, obstacle, ``q_measured``
+                or ``qdot_measured`` (named, with what was expected); the robot's model
+                changed; a call from inside another of this controller's calls in the
+                same thread (one thread at a time).
         """
         if obstacles is None:
-            return self._tick(targets, velocities)
+            return self._tick(targets, velocities, q_measured, qdot_measured)
         with self._held("Controller.step"):
             self._move(obstacles)
-            return self._ticks.step_held(targets, velocities)
+            return self._ticks.step_held(targets, velocities, q_measured, qdot_measured)
 
     def _move(self, obstacles: Any) -> None:
         """:meth:`step`'s ``obstacles``: each moved, from this tick on (the turn held)."""
@@ -283,16 +318,36 @@ class Controller:
         the last ``event_size`` (``events_dropped`` counts the others); its violations
         and task errors the whole session's. Its status is the worst verdict of the
         session (``completed`` when every tick was ``ok``), judged as an offline run's
-        (limits crossed, tolerance, joint speeds).
+        (limits crossed, tolerance, joint speeds). A session given measured joints
+        also records, per kept tick, ``extra["q_commanded"]`` (nq, the joints the
+        controller had commanded for it), ``extra["q_measured"]`` and
+        ``extra["qdot_measured"]`` (NaN where none was given); ``q`` holds the joints
+        each tick's law ran from. The ticks whose verdict was ``measurement_jump`` are
+        counted in ``info["measurement_jumps"]`` and in the reason.
         """
         with self._held("Controller.result"):
             session = self._session
             session.sync()
             status, reason = session.worst
-            if status in ("ok", "violated", "off_track"):  # judged below, as an offline run
+            judged = ("ok", "violated", "off_track", MEASUREMENT_JUMP)
+            if status in judged:  # judged below, as an offline run
                 status = "completed"
                 reason = f"ran {self.k} ticks ({max(self.k - 1, 0) * self.dt:.6g} s)"
-            return session.run.finished(status, reason, float(self._ticks.wall))
+            if session.jumps:
+                reason += f"; {session.jumps} measurement(s) refused ({MEASUREMENT_JUMP}, eq. (M3))"
+            result = session.run.finished(status, reason, float(self._ticks.wall))
+            if self._ticks.measured_given:
+                result.extra.update(self.measured.record(session.run.rec.order()))
+            result.info["measurement_jumps"] = session.jumps
+            return result
+
+
+def _positive(value: Any, field: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.number):
+        raise InputError(field, "a finite number > 0", value)
+    if not (np.isfinite(value) and value > 0):
+        raise InputError(field, "a finite number > 0", value)
+    return float(value)
 
 
 def _count(value: Any, field: str) -> int:

@@ -8,9 +8,10 @@ from typing import Any
 
 import numpy as np
 
-VERDICTS = ("ok", "deadlock", "violated", "diverged", "off_track")
+VERDICTS = ("ok", "deadlock", "violated", "diverged", "off_track", "measurement_jump")
 """A tick's verdicts (docs/method.md, "Online control"), the worst first when several hold:
-``diverged``, ``deadlock``, ``violated``, ``off_track``, then ``ok``."""
+``diverged``, ``deadlock``, ``measurement_jump``, ``violated``, ``off_track``, then
+``ok``."""
 
 
 @dataclass(slots=True)
@@ -28,8 +29,9 @@ class Tick(metaclass=ABCMeta):
         qdot: ``qdot_k``, the law's joint velocity at this tick (nv,) [rad/s or m/s].
         t: This tick's time ``t_k`` [s] (``k dt`` since the last reset).
         k: This tick's index.
-        verdict: ``"ok"``, ``"deadlock"``, ``"violated"``, ``"diverged"`` or
-            ``"off_track"`` (:data:`VERDICTS`).
+        verdict: ``"ok"``, ``"deadlock"``, ``"violated"``, ``"diverged"``,
+            ``"off_track"`` or ``"measurement_jump"`` (a ``q_measured`` refused by eq.
+            (M3): the tick ran from the controller's own joints) (:data:`VERDICTS`).
         reason: What happened, with numbers ("" when ``ok``).
         events: This tick's constraint events, ``{"t", "constraint", "action"}``
             (``action``: ``"activate"``, ``"release"`` or ``"skipped"``).

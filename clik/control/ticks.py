@@ -20,6 +20,7 @@ import numpy as np
 
 from clik.constraints.registry import limit_words
 from clik.constraints.violations import ViolationRecord
+from clik.control.measured import MEASUREMENT_JUMP, JumpFound, MeasuredJoints
 from clik.control.targets import TickTargets
 from clik.control.tick import Tick
 from clik.loop.compiled_run import CompiledConstraints, stopped, synced
@@ -28,7 +29,9 @@ if TYPE_CHECKING:
     from clik.constraints.obstacle import Obstacle
     from clik.loop.tracking import _Run
 
-_RANK = {"diverged": 4, "deadlock": 3, "violated": 2, "off_track": 1, "ok": 0}
+_RANK = {
+    "diverged": 5, "deadlock": 4, MEASUREMENT_JUMP: 3, "violated": 2, "off_track": 1, "ok": 0,
+}  # fmt: skip
 
 
 class Session:
@@ -36,24 +39,32 @@ class Session:
 
     Args:
         run: The session's open run.
+        measured: The controller's measured joints (their reasons).
         native: The compiled engine's run (``_engine.TrackingRun``), or None.
     """
 
-    def __init__(self, run: _Run, native: Any = None) -> None:
-        self.run, self.native = run, native
+    def __init__(self, run: _Run, measured: MeasuredJoints, native: Any = None) -> None:
+        self.run, self.measured, self.native = run, measured, native
         self.worst: tuple[str, str] = ("ok", "")
+        self.jumps = 0  # ticks whose measurement was refused (M3)
 
     def note(self, verdict: str, reason: str) -> None:
         """Keep the session's worst verdict (its result's status)."""
+        self.jumps += verdict == MEASUREMENT_JUMP
         if _RANK[verdict] > _RANK[self.worst[0]]:
             self.worst = (verdict, reason)
 
-    def explain(self, tick: Any, stop: tuple[Any, ...], above_since: float) -> str:
+    def explain(
+        self, tick: Any, stop: tuple[Any, ...], above_since: float, jump: JumpFound | None
+    ) -> str:
         """A compiled tick's reason (its verdict other than ok), noted; the engine's call."""
         run: Any = self.run
         native = self.native
         verdict = tick.verdict
-        if verdict in ("deadlock", "diverged"):
+        if verdict == MEASUREMENT_JUMP:
+            assert jump is not None
+            reason = self.measured.reason(jump)
+        elif verdict in ("deadlock", "diverged"):
             if run.cset is not None:  # the active constraints' names, for the reason
                 live = {"limit": 0, "active_names": native.active_names, "skipped": []}
                 run.crun = CompiledConstraints(run.cset, live)
@@ -93,10 +104,13 @@ class PythonTicks:
         turn: The controller's turn (``_engine.Turn``).
         names: The tasks' names.
         readers: Their readers of a target (``task.tick_target()``), in the same order.
+        measured: The controller's measured joints.
     """
 
-    def __init__(self, turn: Any, names: list[str], readers: list[Any]) -> None:
-        self.turn, self.names = turn, names
+    def __init__(
+        self, turn: Any, names: list[str], readers: list[Any], measured: MeasuredJoints
+    ) -> None:
+        self.turn, self.names, self.measured = turn, names, measured
         self.targets = TickTargets(readers, names)
         self.wall = 0.0
 
@@ -104,6 +118,8 @@ class PythonTicks:
         """A new session at ``q0`` (the controller's turn held)."""
         self.run, self.session = run, session
         self.q = np.array(q0, dtype=float)
+        self.measured.restart(self.q, run.rec.capacity)
+        self.measured_given = 0  # ticks given q_measured this session
         run.rec.start(self.q)
         self.targets.restart()
         self._next = 0
@@ -116,33 +132,50 @@ class PythonTicks:
         """The next tick."""
         return self._next
 
-    def step(self, targets: Any, velocities: Any) -> Tick:
+    def step(
+        self, targets: Any, velocities: Any, q_measured: Any = None, qdot_measured: Any = None
+    ) -> Tick:
         """One tick (:meth:`clik.Controller.step`), the controller's turn taken."""
         self.turn.take("Controller.step")
         try:
-            return self._step(targets, velocities)
+            return self._step(targets, velocities, q_measured, qdot_measured)
         finally:
             self.turn.give()
 
-    def step_held(self, targets: Any, velocities: Any) -> Tick:
+    def step_held(
+        self, targets: Any, velocities: Any, q_measured: Any = None, qdot_measured: Any = None
+    ) -> Tick:
         """:meth:`step` when the caller holds the turn (obstacles moved first)."""
         assert self.turn.mine()
-        return self._step(targets, velocities)
+        return self._step(targets, velocities, q_measured, qdot_measured)
 
-    def _step(self, targets: Any, velocities: Any) -> Tick:
+    def _step(self, targets: Any, velocities: Any, q_measured: Any, qdot_measured: Any) -> Tick:
         staged = self.targets.stage(targets, velocities)  # may run the caller's code
+        given = q_measured is not None or qdot_measured is not None
+        q_m, qdot_m = self.measured.stage(q_measured, qdot_measured) if given else (None, None)
         run = self.run
         run.robot.check_model(full=False)  # changed meanwhile: named by the robot
         p_d, R_d, ff, at_rest, g_ref, g_ff = self.targets.read(staged)
         start = time.perf_counter()
         k = self._next
+        commanded, jump = self.q, None  # q_k, the controller's own
+        law_q = commanded  # the joints the law runs from
+        if q_m is not None:  # (M1): the law runs at q_m unless (M3) refuses it
+            self.measured_given += 1
+            jump = self.measured.jump(q_m, k)
+            if jump is None:
+                self.measured.accept(q_m, k)
+                law_q = q_m
+        kept = run.rec.j
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            stop = run.sample(k, self.q, p_d, R_d, ff, at_rest, g_ref, g_ff)
+            stop = run.sample(k, law_q, p_d, R_d, ff, at_rest, g_ref, g_ff)
             if stop is None or stop[0] != "diverged":
-                self.q = run.integrate(self.q)
+                self.q = run.integrate(commanded)  # (M2): q_{k+1} = q_k (+) qdot_k dt
+        if run.rec.j != kept:
+            self.measured.keep(kept % run.rec.capacity, commanded, q_m, qdot_m)
         self._next = k + 1
         tk = float(run.t[k])
-        verdict, reason = self.verdict(stop, tk)
+        verdict, reason = self.verdict(stop, tk, jump)
         self.session.note(verdict, reason)
         crun = run.crun
         events = [] if crun is None else list(crun.sample_events)
@@ -156,11 +189,15 @@ class PythonTicks:
             errors=dict(zip(self.names, errors, strict=True)),
         )  # fmt: skip
 
-    def verdict(self, stop: tuple[str, str] | None, tk: float) -> tuple[str, str]:
-        """The worst verdict that holds at ``tk``: a check's, a limit crossed, off_track."""
+    def verdict(
+        self, stop: tuple[str, str] | None, tk: float, jump: JumpFound | None = None
+    ) -> tuple[str, str]:
+        """The worst verdict that holds at ``tk``: a check's, a jump, a limit, off_track."""
         seen, self.notes = self.notes, self.run.monitor.notes
         if stop is not None:
             return stop
+        if jump is not None:
+            return MEASUREMENT_JUMP, self.measured.reason(jump)
         if self.notes != seen:
             return "violated", violated_reason(self.session.crossed(tk))
         run, tol = self.run, self.run.tolerance

@@ -5,11 +5,14 @@
 //
 // A step runs in phases, so that nothing of the engine is held across a Python call:
 //   1. the controller's turn (loop/turn.hpp): one thread at a time;
-//   2. stage: every task's target and velocity copied out of the caller's objects into the
-//      ticker's own buffers (a NumPy float64 array read in place through NumPy's C API; any
-//      other form converted by clik.control.targets.as_floats first: Python runs here);
-//   3. read and run: the tasks' readers check the numbers once (tasks/targets.hpp), the run
-//      advances one sample, and the tick's values are copied out (C++ only);
+//   2. stage: every task's target and velocity, and q_measured and qdot_measured, copied
+//      out of the caller's objects into the ticker's own buffers (a NumPy float64 array
+//      read in place through NumPy's C API; any other form converted by
+//      clik.control.targets.as_floats first: Python runs here), their shapes, finiteness
+//      and rotations checked (loop/measured.hpp);
+//   3. read and run: the tasks' readers check the numbers once (tasks/targets.hpp), the
+//      measured joints' jump (M3) is judged, the run advances one sample from them (M1),
+//      and the tick's values are copied out (C++ only);
 //   4. the tick made as a Python object (its arrays, copies), its reason asked of Python
 //      when its verdict is not ok.
 #include <algorithm>
@@ -29,6 +32,7 @@
 #include <nanobind/stl/vector.h>
 
 #include "boundary.hpp"
+#include "loop/measured.hpp"
 #include "loop/py_tick.hpp"
 #include "loop/py_tracking_run.hpp"
 #include "loop/tick_targets.hpp"
@@ -42,8 +46,12 @@ namespace clik {
 
 namespace {
 
-enum Verdict : int { ok = 0, deadlock = 1, violated = 2, diverged = 3, off_track = 4 };
-constexpr const char* VERDICT_NAMES[] = {"ok", "deadlock", "violated", "diverged", "off_track"};
+enum Verdict : int {
+  ok = 0, deadlock = 1, violated = 2, diverged = 3, off_track = 4, measurement_jump = 5
+};
+constexpr int VERDICT_COUNT = 6;
+constexpr const char* VERDICT_NAMES[] = {"ok",       "deadlock",  "violated",
+                                         "diverged", "off_track", "measurement_jump"};
 
 // The tolerance of the off_track verdict: position [m], orientation [rad], settling [s].
 struct TickTolerance {
@@ -103,7 +111,13 @@ struct PyTicker {
   nb::handle tick_type;  // _engine.Tick (the module keeps it)
   std::vector<nb::object> fields, velocity_fields;  // "targets['name']", "velocities['name']"
   TickTolerance tol;
-  nb::object verdicts[5], no_reason;
+  nb::object verdicts[VERDICT_COUNT], no_reason;
+  // the measured joints (clik/control/measured.py): checks, (M3), and their words
+  std::unique_ptr<Measured> measured;
+  long measured_bound_size = 0;  // nv
+  double rotation_tolerance = 0.0;
+  nb::object q_field, qdot_field, measured_words, measured_velocity_words;
+  std::vector<nb::object> rotation_words;  // what each rotation of q must be
 
   // the session (restart)
   nb::object owner;  // the PyTrackingRun (kept alive)
@@ -118,6 +132,13 @@ struct PyTicker {
   double wall = 0.0;  // time in the ticks [s]
   double above_since = std::numeric_limits<double>::quiet_NaN();
   Advance last;
+  // this session's record of the measured joints (the MeasuredJoints' arrays, written)
+  WrittenArray<double> rec_commanded, rec_measured, rec_qdot_measured;
+  long measured_given = 0;  // ticks given q_measured
+  // this tick's: q_measured and qdot_measured given, a jump (M3), q_k before it
+  bool has_q = false, has_qdot = false, jumped = false;
+  Jump jump;
+  Vec commanded;
 
   void must_hold(const char* who) const {
     if (!turn->mine()) throw std::logic_error(std::string(who) + ": the controller's turn");
@@ -236,6 +257,68 @@ struct PyTicker {
     }
   }
 
+  // q_measured (qdot_measured) into the measured buffer of n values: the same checks, in
+  // the same order, as MeasuredJoints.stage (shape, finite, rotations).
+  void stage_joints(nb::handle value, bool velocity) {
+    const nb::object& field = velocity ? qdot_field : q_field;
+    const nb::object& words = velocity ? measured_velocity_words : measured_words;
+    Vec& out = velocity ? measured->qdot() : measured->q();
+    nb::object converted;
+    PyObject* o = value.ptr();
+    if (!plain_doubles(o)) {  // Python code may run here: nothing of the ticker is held
+      converted = convert(value, field, words);
+      o = converted.ptr();
+      if (!plain_doubles(o)) throw std::logic_error("as_floats: a float64 C-contiguous array");
+    }
+    auto* a = reinterpret_cast<PyArrayObject*>(o);
+    if (PyArray_NDIM(a) != 1 || PyArray_DIMS(a)[0] != out.size()) {
+      nb::object shape = nb::borrow(PyArray_Shape_of(a));
+      raise(field, nb::cast<std::string>(words), nb::str(("shape " + nb::cast<std::string>(nb::repr(shape))).c_str()));
+    }
+    std::memcpy(out.data(), PyArray_DATA(a), static_cast<std::size_t>(out.size()) * sizeof(double));
+    if (!out.allFinite()) {
+      raise(field, "finite numbers: " + nb::cast<std::string>(words), list_of(out, 0, out.size()));
+    }
+    if (velocity) return;
+    long bad = 0;
+    if (!measured->unit_rotations(rotation_tolerance, bad)) {
+      const Rotation& r = measured->rotations()[static_cast<std::size_t>(bad)];
+      raise(field, nb::cast<std::string>(rotation_words[static_cast<std::size_t>(bad)]),
+            list_of(out, r.start, r.size));
+    }
+  }
+
+  static nb::object PyArray_Shape_of(PyArrayObject* a) {
+    nb::list dims;
+    for (int d = 0; d < PyArray_NDIM(a); ++d) dims.append(static_cast<long>(PyArray_DIMS(a)[d]));
+    return nb::tuple(dims);
+  }
+
+  static nb::object list_of(const Vec& v, long start, long n) {
+    nb::list out;
+    for (long i = start; i < start + n; ++i) out.append(v[i]);
+    return out;
+  }
+
+  // qdot_measured needs q_measured: refused as MeasuredJoints.stage refuses it.
+  void stage_measured(nb::handle q_in, nb::handle qdot_in) {
+    has_q = !q_in.is_none();
+    has_qdot = !qdot_in.is_none();
+    if (!has_q && has_qdot) raise(qdot_field, "given with q_measured", nb::str("no q_measured"));
+    if (has_q) stage_joints(q_in, false);
+    if (has_qdot) stage_joints(qdot_in, true);
+  }
+
+  // Record slot j of the measured joints (NaN: none given), as MeasuredJoints.keep.
+  void keep_measured(long j) {
+    const long nq = commanded.size(), nv = measured->qdot().size();
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    VecMap(rec_commanded.data() + j * nq, nq) = commanded;
+    VecMap m(rec_measured.data() + j * nq, nq), md(rec_qdot_measured.data() + j * nv, nv);
+    if (has_q) m = measured->q(); else m.setConstant(nan);
+    if (has_qdot) md = measured->qdot(); else md.setConstant(nan);
+  }
+
   std::string joined() const {
     std::string s;
     for (nb::handle name : task_names) {
@@ -253,6 +336,7 @@ struct PyTicker {
     notes = r.monitor().notes();
     if (last.stop == Stop::deadlock || last.stop == Stop::stall) return deadlock;
     if (last.stop != Stop::none) return diverged;
+    if (jumped) return measurement_jump;
     if (notes != before) return violated;
     const TaskConfig& task = r.task();
     const double limit = task.has_position ? tol.position : tol.orientation;
@@ -281,7 +365,8 @@ struct PyTicker {
     raise(why.velocity ? velocity_fields[at] : fields[at], why.expected, values_of(f));
   }
 
-  nb::object step(nb::handle targets_in, nb::handle velocities_in, bool held) {
+  nb::object step(nb::handle targets_in, nb::handle velocities_in, nb::handle q_in,
+                  nb::handle qdot_in, bool held) {
     std::optional<Turn::Held> turn_held;
     if (held) {
       must_hold("Ticker.step(held=True)");
@@ -289,6 +374,7 @@ struct PyTicker {
       turn_held.emplace(*turn, "Controller.step");
     }
     stage_all(targets_in, velocities_in);
+    stage_measured(q_in, qdot_in);
     if (!(ModelShape::of(*model) == run->built)) {  // changed meanwhile: named by the robot
       check_model();
       raise(nb::str("robot.model"), "the model the controller was built on", nb::none());
@@ -303,9 +389,27 @@ struct PyTicker {
     const auto start = std::chrono::steady_clock::now();
     const long k = run->next;
     TrackingRun& r = *run->run;
+    commanded = q;  // q_k, the controller's own
+    jumped = false;
+    if (has_q) {  // (M1): the law runs at q_m unless (M3) refuses it
+      ++measured_given;
+      jumped = measured->jumped(*model, k, jump);
+      if (!jumped) q = measured->q();
+    }
+    const long kept = r.kept();
     last = r.advance(k, k + 1, targets->P_d(), targets->R_d(), targets->FF(),
                      targets->at_rest(), q, targets->goal_ref(), targets->goal_ff());
     run->next = last.next;
+    if (has_q && !jumped) {  // (M2): q_{k+1} = q_k (+) qdot_k dt, or q_k held (diverged)
+      const bool held =
+          last.stop != Stop::none && last.stop != Stop::deadlock && last.stop != Stop::stall;
+      if (held) {
+        q = commanded;
+      } else {
+        measured->integrate(*model, commanded, r.qdot(), q);
+      }
+    }
+    if (r.kept() != kept) keep_measured(kept % rec_commanded.shape(0));
     const double tk = r.time(k);
     out.code = judge(tk);
     out.t = tk;
@@ -332,7 +436,9 @@ struct PyTicker {
     out.qdot.assign(qdot.data(), static_cast<std::size_t>(qdot.size()));
     wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (out.code != ok) {  // its reason, in Python (nothing of the engine held)
-      nb::object reason = explain(tick, stop_tuple(), above_since);
+      nb::object jumped_tuple = nb::none();
+      if (jumped) jumped_tuple = nb::make_tuple(jump.i, jump.size, jump.limit, jump.k_accepted, jump.n);
+      nb::object reason = explain(tick, stop_tuple(), above_since, jumped_tuple);
       nb::inst_ptr<PyTick>(tick)->reason = std::move(reason);
     }
     return tick;
@@ -343,11 +449,23 @@ struct PyTicker {
   }
 
   // A new session on an open run from q0 (the controller's turn held by reset).
-  void restart(nb::object run_owner, const Eigen::Ref<const Vec>& q0, nb::object explainer) {
+  void restart(nb::object run_owner, const Eigen::Ref<const Vec>& q0, nb::object explainer,
+               WrittenArray<double> q_commanded, WrittenArray<double> q_measured,
+               WrittenArray<double> qdot_measured) {
     must_hold("Ticker.restart");
     PyTrackingRun& r = nb::cast<PyTrackingRun&>(run_owner);
     require(r.run->is_open(), "Ticker.restart: an open TrackingRun (t None)");
     require(q0.size() == r.record.nq(), "Ticker.restart: q0 (nq,)");
+    const long cap = r.record.capacity();
+    const auto fits = [cap](const WrittenArray<double>& a, long n) {
+      return a.ndim() == 2 && static_cast<long>(a.shape(0)) == cap &&
+             static_cast<long>(a.shape(1)) == n;
+    };
+    require(fits(q_commanded, r.record.nq()) && fits(q_measured, r.record.nq()) &&
+                fits(qdot_measured, r.record.nv()),
+            "Ticker.restart: the measured record (capacity, nq), (capacity, nq), "
+            "(capacity, nv)");
+    require(r.record.nv() == measured_bound_size, "Ticker.restart: the jump bound (nv,)");
     const pinocchio::Model& m = borrow_model(r.model.ptr());
     require_same_model(r.built, m, "Ticker.restart");
     auto in = std::make_unique<TickTargets>(*r.run);
@@ -372,6 +490,13 @@ struct PyTicker {
     target_words = std::move(tw);
     velocity_words = std::move(vw);
     q = q0;
+    measured->restart(q0);
+    commanded = q0;
+    rec_commanded = std::move(q_commanded);
+    rec_measured = std::move(q_measured);
+    rec_qdot_measured = std::move(qdot_measured);
+    measured_given = 0;
+    has_q = has_qdot = jumped = false;
     constraint_names = nb::tuple(names);
     notes = 0;
     wall = 0.0;
@@ -382,7 +507,10 @@ struct PyTicker {
 
 void make_ticker(PyTicker* self, nb::object turn, nb::object refuse, nb::object convert,
                  nb::object as_mapping, nb::object check_model, std::vector<std::string> names,
-                 double tol_position, double tol_orientation, double settling_time) {
+                 double tol_position, double tol_orientation, double settling_time, double dt,
+                 const Eigen::Ref<const Vec>& jump_bound, nb::list rotations,
+                 double rotation_tolerance, std::string measured_words,
+                 std::string measured_velocity_words) {
   require(!names.empty(), "Ticker: names, one per task");
   require(finite_positive(tol_position) && finite_positive(tol_orientation) &&
               finite_positive(settling_time),
@@ -407,7 +535,28 @@ void make_ticker(PyTicker* self, nb::object turn, nb::object refuse, nb::object 
   self->task_names = nb::tuple(task_names);
   self->tick_type = nb::type<PyTick>();
   self->tol = {tol_position, tol_orientation, settling_time};
-  for (int v = 0; v < 5; ++v) self->verdicts[v] = nb::str(VERDICT_NAMES[v]);
+  for (int v = 0; v < VERDICT_COUNT; ++v) self->verdicts[v] = nb::str(VERDICT_NAMES[v]);
+  require(finite_positive(rotation_tolerance), "Ticker: rotation_tolerance > 0");
+  for (Eigen::Index i = 0; i < jump_bound.size(); ++i) {
+    require(jump_bound[i] > 0.0, "Ticker: jump_bound (nv,), > 0 (inf: none)");
+  }
+  std::vector<Rotation> rs;
+  for (nb::handle item : rotations) {  // (start, size, expected) as rotation_slices gives
+    const nb::tuple t = nb::cast<nb::tuple>(item);
+    require(t.size() == 3, "Ticker: rotations, (start, size, expected) each");
+    const Rotation rot{nb::cast<long>(t[0]), nb::cast<long>(t[1])};
+    require(rot.start >= 0 && (rot.size == 2 || rot.size == 4), "Ticker: a rotation's start, size");
+    rs.push_back(rot);
+    self->rotation_words.push_back(nb::borrow(t[2]));
+  }
+  require(finite_positive(dt), "Ticker: dt > 0 [s]");
+  self->measured = std::make_unique<Measured>(Vec(jump_bound), std::move(rs), dt);
+  self->measured_bound_size = static_cast<long>(jump_bound.size());
+  self->rotation_tolerance = rotation_tolerance;
+  self->q_field = nb::str("q_measured");
+  self->qdot_field = nb::str("qdot_measured");
+  self->measured_words = nb::str(measured_words.c_str());
+  self->measured_velocity_words = nb::str(measured_velocity_words.c_str());
   self->no_reason = nb::str("");
 }
 
@@ -421,37 +570,50 @@ void bind_ticker(nb::module_& m) {
       .def("__init__", &make_ticker, nb::kw_only(), nb::arg("turn"), nb::arg("refuse"),
            nb::arg("convert"), nb::arg("as_mapping"), nb::arg("check_model"), nb::arg("names"),
            nb::arg("tol_position"), nb::arg("tol_orientation"), nb::arg("settling_time"),
+           nb::arg("dt"), nb::arg("jump_bound").noconvert(), nb::arg("rotations"),
+           nb::arg("rotation_tolerance"), nb::arg("measured_words"),
+           nb::arg("measured_velocity_words"),
            "turn: the controller's Turn; refuse: clik.InputError; convert(value, field, "
            "expected): a target or velocity as a float64 C-contiguous array (or raises); "
            "as_mapping(value, field, names): a dict, or None for a value that is no mapping; "
-           "check_model(): raises when the robot's model changed; names: the tasks'. Then "
-           "restart() gives it a session.")
+           "check_model(): raises when the robot's model changed; names: the tasks'; "
+           "dt: the tick [s]; jump_bound: (M3)'s b (nv,) [rad or m], inf: none; rotations: (start, size, "
+           "expected) of each unit rotation in q; measured_words (measured_velocity_words): "
+           "what q_measured (qdot_measured) must be. Then restart() gives it a session.")
       .def("restart", &PyTicker::restart, nb::arg("run"), nb::arg("q0").noconvert(),
-           nb::arg("explain"),
+           nb::arg("explain"), nb::arg("q_commanded").noconvert(),
+           nb::arg("q_measured").noconvert(), nb::arg("qdot_measured").noconvert(),
            "A new session (the turn held): run an open TrackingRun, q0 (nq,), explain(tick, "
-           "stop, above_since) -> the reason of a verdict other than ok.")
+           "stop, above_since, jump) -> the reason of a verdict other than ok; the measured "
+           "record's arrays (capacity, nq), (capacity, nq), (capacity, nv), written.")
       .def(
           "step",
-          [](PyTicker& s, nb::handle targets, nb::handle velocities) {
+          [](PyTicker& s, nb::handle targets, nb::handle velocities, nb::handle q_measured,
+             nb::handle qdot_measured) {
             require(s.run != nullptr, "Ticker.step: restart() first");
-            return s.step(targets, velocities, false);
+            return s.step(targets, velocities, q_measured, qdot_measured, false);
           },
           nb::arg("targets").none(), nb::arg("velocities").none(),
-          "One tick (Controller.step): the targets and velocities (None: none) as the "
-          "controller takes them.")
+          nb::arg("q_measured").none() = nb::none(), nb::arg("qdot_measured").none() = nb::none(),
+          "One tick (Controller.step): the targets, velocities, q_measured and qdot_measured "
+          "(None: none) as the controller takes them.")
       .def(
           "step_held",
-          [](PyTicker& s, nb::handle targets, nb::handle velocities) {
+          [](PyTicker& s, nb::handle targets, nb::handle velocities, nb::handle q_measured,
+             nb::handle qdot_measured) {
             require(s.run != nullptr, "Ticker.step_held: restart() first");
-            return s.step(targets, velocities, true);
+            return s.step(targets, velocities, q_measured, qdot_measured, true);
           },
           nb::arg("targets").none(), nb::arg("velocities").none(),
+          nb::arg("q_measured").none() = nb::none(), nb::arg("qdot_measured").none() = nb::none(),
           "step_held(targets, velocities): step() when the caller holds the turn already "
           "(obstacles moved first).")
       .def_prop_ro("k", [](const PyTicker& s) { return s.run ? s.run->next : 0L; },
                    "The next tick's index.")
       .def_prop_ro("q", [](const PyTicker& s) { return array_of(s.q.data(), s.q.size()); },
                    "The joints the next tick starts from (a copy).")
+      .def_prop_ro("measured_given", [](const PyTicker& s) { return s.measured_given; },
+                   "Ticks of this session given q_measured.")
       .def_prop_ro("wall", [](const PyTicker& s) { return s.wall; },
                    "Time spent in the ticks of this session [s].");
 }

@@ -75,7 +75,8 @@ struct PyTick {
   Joints q, qdot;  // q_{k+1} (nq), qdot_k (nv)
   double t = 0.0;
   long k = 0;
-  int code = 0;  // the verdict's: 0 ok, 1 deadlock, 2 violated, 3 diverged, 4 off_track
+  int code = 0;  // the verdict's: 0 ok, 1 deadlock, 2 violated, 3 diverged, 4 off_track,
+                 // 5 measurement_jump
   nanobind::object verdict, reason;
   nanobind::object task_names, constraint_names;  // tuples: by task, by constraint key
   std::vector<Event> events;                       // this tick's
