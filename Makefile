@@ -72,7 +72,7 @@ test: $(VENV)/.installed-test
 test-ros: $(VENV)/.installed-test
 	@echo "clik: installing the ros extra into $(VENV) (log: $(LOG))..."
 	@$(call logged,$(call REQUIREMENTS,ros) > $(VENV)/requirements-ros.txt && $(PIP) install -r $(VENV)/requirements-ros.txt && $(PIP) install --force-reinstall --no-deps "lark>=1.2")
-	$(PY) -m pytest tests/ros tests/outputs/test_export_rosbag.py --timeout=600 -q -rs
+	$(PY) -m pytest tests/ros tests/outputs/test_export_rosbag.py --timeout=600 -q -rs -s
 
 lint: $(VENV)/.installed-test
 	$(VENV)/bin/ruff check clik benchmarks tests

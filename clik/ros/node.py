@@ -350,17 +350,21 @@ class ClikNode:
         2 kHz of timer and joint states; else the default one.
         """
         rclpy = self.ros["rclpy"]
+        from rclpy.executors import ExternalShutdownException
+
         executor = _executor(rclpy)
         executor.add_node(self.node)
         end = None if duration is None else time.monotonic() + duration
         try:
             while rclpy.ok() and (end is None or time.monotonic() < end):
                 executor.spin_once(timeout_sec=0.05)
+        except ExternalShutdownException:  # SIGINT or SIGTERM, through rclpy's handlers
+            pass
         finally:
             executor.shutdown()
             self.node.destroy_node()
             if rclpy.ok():
-                rclpy.shutdown()
+                rclpy.try_shutdown()
 
 
 def _executor(rclpy: Any) -> Any:

@@ -28,9 +28,11 @@ def test_the_loop_answers_tracks_refuses_and_holds(tmp_path: Path) -> None:
     assert out["node_stderr"] == ""
     assert out["answered"] == out["sent"] == 3000  # every target answered
     assert out["rtt_ms"]["median"] < 50.0
-    # the hand on the lagging robot's joints, against the circle
-    assert out["max_error_m"] < 2e-3
-    assert out["final_error_m"] < 2e-3
+    # the hand on the lagging robot's joints, against the circle: the robot lags 5 ms + 2
+    # ticks behind commands that come a round trip (a few ms) after their target, at up
+    # to 0.31 m/s on this circle: a few millimetres
+    assert out["max_error_m"] < 5e-3
+    assert out["final_error_m"] < 5e-3
     refused = out["refused"]
     assert refused and refused[0]["field"] == "/clik/task/target: pose.position"
     assert "finite" in refused[0]["message"]
