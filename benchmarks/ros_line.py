@@ -43,15 +43,16 @@ def unavailable() -> str:
     return ""
 
 
-def run_loop(folder: Path, targets: int) -> dict[str, Any]:
+def run_loop(folder: Path, targets: int, output: str = "trajectory") -> dict[str, Any]:
     """The loop on the Panda circle in a private namespace; its JSON (see ros_loop.py).
 
     Args:
         folder: Where to write the scenario.
         targets: How many targets the client sends.
+        output: The node's ``[ros] output``.
     """
     scenario = folder / "ros_circle.toml"
-    scenario.write_text(CIRCLE.read_text() + ROS_TABLE)
+    scenario.write_text(CIRCLE.read_text() + ROS_TABLE + f'output = "{output}"\n')
     env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
            "RMW_IMPLEMENTATION": "rmw_fastrtps_cpp", "ROS_DOMAIN_ID": "42"}  # fmt: skip
     command = f"ip link set lo up && exec {sys.executable} {LOOP} {scenario} --targets {targets}"

@@ -33,13 +33,25 @@ import rclpy
 from geometry_msgs.msg import PoseStamped, TwistStamped
 from rclpy.executors import ExternalShutdownException
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Header, String
+from std_msgs.msg import Float64MultiArray, Header, String
 from trajectory_msgs.msg import JointTrajectory
 
 from clik.model.joint_order import JointOrder
 from clik.ros.node import _executor
 from clik.ros.settings import RosSettings
 from clik.scenarios.runner import build
+
+
+def _command_type(settings: RosSettings) -> Any:
+    """The command topic's message type for the node's ``output``."""
+    return JointTrajectory if settings.output == "trajectory" else Float64MultiArray
+
+
+def _command_values(msg: Any) -> np.ndarray:
+    """A command's joint values: a trajectory's point, or the array's data."""
+    if isinstance(msg, JointTrajectory):
+        return np.array(msg.points[0].positions)
+    return np.array(msg.data)
 
 
 class Robot:
@@ -52,13 +64,17 @@ class Robot:
         self.queue: deque[np.ndarray] = deque([self.q.copy()] * (delay + 1), maxlen=delay + 1)
         self.command = self.q.copy()
         self.commands = 0
-        node.create_subscription(JointTrajectory, settings.output_topic, self.on_command, 10)
+        self.velocity = settings.output == "velocity"
+        node.create_subscription(
+            _command_type(settings), settings.output_topic, self.on_command, 10
+        )
         self.pub = node.create_publisher(JointState, settings.joint_states, 10)
         node.create_timer(self.dt, self.step)
 
     def on_command(self, msg: Any) -> None:
         """A command: its point's positions become the robot's input."""
-        self.command = np.array(msg.points[0].positions)
+        values = _command_values(msg)
+        self.command = self.command + values * self.dt if self.velocity else values
         self.commands += 1
 
     def step(self) -> None:
@@ -136,9 +152,11 @@ def main() -> int:
     node.create_subscription(JointState, settings.joint_states, on_joints, 1)
 
     def on_command(m: Any) -> None:
-        latest["commands"].append(np.array(m.points[0].positions))
+        latest["commands"].append(_command_values(m))
 
-    commands = node.create_subscription(JointTrajectory, settings.output_topic, on_command, 1)
+    commands = node.create_subscription(
+        _command_type(settings), settings.output_topic, on_command, 1
+    )
     answered: dict[str, Any] = {}
     statuses: list[dict[str, Any]] = []
     node.create_subscription(
@@ -194,7 +212,7 @@ def main() -> int:
         errors.append(float(np.linalg.norm(data.oMf[frame].translation - ref.position[k])))
     # stop sending: the node must hold and say stale
     pause = time.monotonic()
-    node.create_subscription(JointTrajectory, settings.output_topic, on_command, 10)
+    node.create_subscription(_command_type(settings), settings.output_topic, on_command, 10)
     while time.monotonic() - pause < 1.5 * settings.timeout:
         spin(timeout_sec=0.005)
     held_from = len(latest["commands"])

@@ -20,6 +20,8 @@ the task's name): a client's round trip.
 from __future__ import annotations
 
 import json
+import signal
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -115,7 +117,11 @@ class ClikNode:
         self._others |= set(getattr(self.robot, "locked", {}) or {})
         self._data = full.createData()
         if not ros["rclpy"].ok():
-            ros["rclpy"].init()
+            # clik's own SIGINT/SIGTERM handling (spin): rclpy's would shut the context
+            # down under a running callback
+            from rclpy.signals import SignalHandlerOptions
+
+            ros["rclpy"].init(signal_handler_options=SignalHandlerOptions.NO)
         self.node = node = ros["rclpy"].create_node(NODE_NAME)
         self._subscribe(node)
         kind = (
@@ -343,28 +349,31 @@ class ClikNode:
     # -- running -------------------------------------------------------------------------
 
     def spin(self, duration: float | None = None) -> None:
-        """Run until ``duration`` [s] has passed (None: until Ctrl-C), then shut down.
+        """Run until ``duration`` [s] has passed, Ctrl-C or SIGTERM; then shut down.
 
         rclpy's events executor (C++ callbacks dispatch) when this rclpy has it: the
         default executor's Python wait set costs about a millisecond per callback at
         2 kHz of timer and joint states; else the default one.
         """
         rclpy = self.ros["rclpy"]
-        from rclpy.executors import ExternalShutdownException
-
         executor = _executor(rclpy)
         executor.add_node(self.node)
         end = None if duration is None else time.monotonic() + duration
+        stop: list[int] = []
+        before = None
+        if threading.current_thread() is threading.main_thread():
+            before = signal.signal(signal.SIGTERM, lambda number, frame: stop.append(number))
         try:
-            while rclpy.ok() and (end is None or time.monotonic() < end):
+            while not stop and rclpy.ok() and (end is None or time.monotonic() < end):
                 executor.spin_once(timeout_sec=0.05)
-        except ExternalShutdownException:  # SIGINT or SIGTERM, through rclpy's handlers
+        except KeyboardInterrupt:  # Ctrl-C: stopped between callbacks, then cleaned up
             pass
         finally:
+            if before is not None:
+                signal.signal(signal.SIGTERM, before)
             executor.shutdown()
             self.node.destroy_node()
-            if rclpy.ok():
-                rclpy.try_shutdown()
+            rclpy.try_shutdown()
 
 
 def _executor(rclpy: Any) -> Any:

@@ -39,3 +39,15 @@ def test_the_loop_answers_tracks_refuses_and_holds(tmp_path: Path) -> None:
     assert any("/clik/task/target" in s for s in out["stale"])  # said when the targets stop
     assert out["held"]  # and the command held
     assert out["verdicts"] == ["ok"]
+
+
+@pytest.mark.parametrize("output", ["position", "velocity"])
+def test_the_other_outputs_drive_the_robot(tmp_path: Path, output: str) -> None:
+    why = unavailable()
+    if why:
+        pytest.skip(f"the ROS loop runs only in a private network namespace: {why}")
+    out = run_loop(tmp_path, 1000, output)
+    assert out["node_stderr"] == ""
+    assert out["answered"] == out["sent"] == 1000
+    assert out["max_error_m"] < 5e-3  # the robot integrates velocities, or takes positions
+    assert out["held"]  # held: the same positions, or zero velocities
