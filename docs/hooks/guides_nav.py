@@ -25,6 +25,8 @@ GUIDES_ORDER = (
     "sweeps",
     "export",
     "online-control",
+    "ros",
+    "simulate",
     "performance",
 )
 """File stems of the guides in reading order."""
