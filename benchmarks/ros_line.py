@@ -25,6 +25,9 @@ LOOP = Path(__file__).with_name("ros_loop.py")
 CIRCLE = Path(__file__).resolve().parents[1] / "clik" / "scenarios" / "panda_circle.toml"
 ROS_TABLE = "\n[ros]\ntimeout = 0.25\n"
 """Appended to the Panda circle: the loop's scenario."""
+GAIN = 200.0
+"""The loop's gain [1/s] (the circle's is 1000): a robot lagging 5 ms + 2 ticks, fed back,
+is stable for gain * dt below about 0.36 (docs/method.md, (M4))."""
 TARGETS = 2000
 """Targets per bench run."""
 
@@ -52,7 +55,8 @@ def run_loop(folder: Path, targets: int, output: str = "trajectory") -> dict[str
         output: The node's ``[ros] output``.
     """
     scenario = folder / "ros_circle.toml"
-    scenario.write_text(CIRCLE.read_text() + ROS_TABLE + f'output = "{output}"\n')
+    text = CIRCLE.read_text().replace("gain = 1000.0", f"gain = {GAIN}")
+    scenario.write_text(text + ROS_TABLE + f'output = "{output}"\n')
     env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
            "RMW_IMPLEMENTATION": "rmw_fastrtps_cpp", "ROS_DOMAIN_ID": "42"}  # fmt: skip
     command = f"ip link set lo up && exec {sys.executable} {LOOP} {scenario} --targets {targets}"
@@ -88,7 +92,8 @@ def bench_ros(config: BenchConfig, say: Log) -> dict[str, Any]:
         "max_error_m": out["max_error_m"],
         "final_error_m": out["final_error_m"],
         "text": (
-            "clik ros on the Panda circle, a robot lagging 2 ticks + 5 ms, a client sending "
-            "one target at a time (pose + twist) and waiting for its answer; loopback only"
+            f"clik ros on the Panda circle (gain {GAIN:g} 1/s), a robot lagging 2 ticks + 5 ms, "
+            "a client sending one target at a time (pose + twist) and waiting for its answer; "
+            "loopback only"
         ),
     }

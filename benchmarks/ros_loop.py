@@ -38,7 +38,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from clik.model.joint_order import JointOrder
 from clik.ros.node import _executor
-from clik.ros.settings import RosSettings
+from clik.scenarios.ros_table import RosSettings
 from clik.scenarios.runner import build
 
 
@@ -116,6 +116,151 @@ def _pose(position: np.ndarray, rotation: np.ndarray, stamp: Any) -> PoseStamped
     return msg
 
 
+def _twist(linear: np.ndarray, angular: np.ndarray, stamp: Any) -> TwistStamped:
+    msg = TwistStamped()
+    msg.header.stamp, msg.header.frame_id = stamp, "world"
+    msg.twist.linear.x, msg.twist.linear.y, msg.twist.linear.z = map(float, linear)
+    msg.twist.angular.x, msg.twist.angular.y, msg.twist.angular.z = map(float, angular)
+    return msg
+
+
+def _processes(args: argparse.Namespace) -> tuple[subprocess.Popen[str], subprocess.Popen[str]]:
+    """The ``clik ros`` node and the test robot, started."""
+    clik = subprocess.Popen(
+        [sys.executable, "-c", "import sys; from clik.cli import main; sys.exit(main())",
+         "ros", args.scenario, "--duration", "60"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    robot = subprocess.Popen(
+        [sys.executable, __file__, args.scenario, "--robot", "--tau", str(args.tau),
+         "--delay", str(args.delay), "--duration", "120"], text=True,
+    )  # fmt: skip
+    return clik, robot
+
+
+class Client:
+    """Targets out one at a time, answers, joint states, commands and statuses in."""
+
+    def __init__(self, run: Any, settings: RosSettings, order: JointOrder) -> None:
+        self.run, self.settings, self.order = run, settings, order
+        self.node = node = rclpy.create_node("clik_test_client")
+        self.q = order.angles(run.q0)[0]
+        self.states = 0  # joint states received
+        self.commands: list[np.ndarray] = []
+        self.answered: tuple[int, int] | None = None
+        self.statuses: list[dict[str, Any]] = []
+        node.create_subscription(JointState, settings.joint_states, self._on_joints, 1)
+        self.listening = node.create_subscription(
+            _command_type(settings), settings.output_topic, self.commands.append, 1
+        )
+        node.create_subscription(Header, f"{settings.prefix}/answered", self._on_answer, 10)
+        node.create_subscription(String, settings.status, self._on_status, 100)
+        self.target = node.create_publisher(PoseStamped, settings.target_topic("task"), 10)
+        self.twist = node.create_publisher(TwistStamped, settings.twist_topic("task"), 10)
+        self.executor = _executor(rclpy)
+        self.executor.add_node(node)
+
+    def _on_joints(self, m: Any) -> None:
+        self.q = np.array(m.position)
+        self.states += 1
+
+    def _on_answer(self, m: Any) -> None:
+        self.answered = (m.stamp.sec, m.stamp.nanosec)
+
+    def _on_status(self, m: Any) -> None:
+        self.statuses.append(json.loads(m.data))
+
+    def spin(self, seconds: float) -> None:
+        """Callbacks for ``seconds``."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=0.005)
+
+    def wait_for_node(self) -> None:
+        """Until the node's first command and the robot's first joint state (<= 60 s)."""
+        end = time.monotonic() + 60
+        while not (self.commands and self.states) and time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=0.01)
+        self.node.destroy_subscription(self.listening)  # fewer callbacks until the hold
+
+    def send(self, position: np.ndarray, rotation: np.ndarray, twist: Any) -> float | None:
+        """One target (and its twist); the round trip [s], None without an answer in 1 s."""
+        stamp = self.node.get_clock().now().to_msg()
+        self.twist.publish(_twist(twist[0], twist[1], stamp))
+        sent_at = time.perf_counter()
+        self.target.publish(_pose(position, rotation, stamp))
+        key = (stamp.sec, stamp.nanosec)
+        while self.answered != key and time.perf_counter() - sent_at < 1.0:
+            self.executor.spin_once(timeout_sec=0.0005)
+        return time.perf_counter() - sent_at if self.answered == key else None
+
+    def hand_error(self, frame: int, reference: np.ndarray) -> float:
+        """The hand on the robot's latest joints, from the reference [m]."""
+        model = self.run.robot.model
+        data = model.createData()
+        pin.framesForwardKinematics(model, data, self.order.configuration(self.run.q0, self.q))
+        return float(np.linalg.norm(data.oMf[frame].translation - reference))
+
+    def hold(self) -> list[np.ndarray]:
+        """Stop sending: the commands after 1.5 timeouts (the node holds by then)."""
+        self.listening = self.node.create_subscription(
+            _command_type(self.settings), self.settings.output_topic, self.commands.append, 10
+        )
+        self.spin(1.5 * self.settings.timeout)
+        start = len(self.commands)
+        self.spin(0.5 * self.settings.timeout + 0.2)
+        return [_command_values(c) for c in self.commands[start:]]
+
+
+def _track(
+    client: Client, run: Any, targets: int, clik: Any
+) -> tuple[list[float], list[float], int]:
+    """The reference sent target by target (a NaN pose midway).
+
+    Returns:
+        The round trips [s], the hand errors [m] and how many targets were sent.
+    """
+    t = np.arange(targets) * run.scenario.solver["dt"]
+    ref = run.trajectory.sample(t)
+    assert ref.position is not None and ref.rotation is not None  # a pose task's circle
+    assert ref.linear_velocity is not None and ref.angular_velocity is not None
+    rtt: list[float] = []
+    errors: list[float] = []
+    sent = 0
+    for k in range(targets):
+        if k == targets // 2:  # a NaN: refused by name, the node goes on
+            stamp = client.node.get_clock().now().to_msg()
+            client.target.publish(_pose(np.array([np.nan, 0.0, 0.0]), np.eye(3), stamp))
+        took = client.send(ref.position[k], ref.rotation[k],
+                           (ref.linear_velocity[k], ref.angular_velocity[k]))  # fmt: skip
+        sent += 1
+        if took is not None:
+            rtt.append(took)
+        elif clik.poll() is not None or k - len(rtt) > 5:  # the node died or does not answer
+            break
+        errors.append(client.hand_error(run.task.frame_id, ref.position[k]))
+    return rtt, errors, sent
+
+
+def _summary(rtt: list[float], errors: list[float], sent: int, held: list[np.ndarray],
+             statuses: list[dict[str, Any]], out: str, err: str) -> dict[str, Any]:  # fmt: skip
+    quantiles = {"median": 1e3 * float(np.median(rtt)), "p99": 1e3 * float(np.percentile(rtt, 99))}
+    return {
+        "sent": sent,
+        "answered": len(rtt),
+        "rtt_ms": quantiles if rtt else None,
+        "max_error_m": max(errors[200:]) if len(errors) > 200 else None,
+        "final_error_m": errors[-1] if errors else None,
+        "refused": [s["refused"] for s in statuses if s.get("refused")],
+        "stale": [s["stale"] for s in statuses if s.get("stale")],
+        "held": bool(held) and all(np.array_equal(c, held[0]) for c in held),
+        "verdicts": sorted({s.get("verdict", "") for s in statuses}),
+        "node_stdout": out[-2000:],
+        "node_stderr": err[-2000:],
+        "rmw": os.environ.get("RMW_IMPLEMENTATION", ""),
+    }
+
+
 def main() -> int:
     """The client (or, with ``--robot``, the robot); prints the loop's JSON."""
     a = argparse.ArgumentParser()
@@ -130,124 +275,19 @@ def main() -> int:
         return robot_main(args.scenario, args.tau, args.delay, args.duration)
     run = build(args.scenario)
     settings = RosSettings(**run.scenario.ros)
-    robot_model = run.robot
-    order = JointOrder.of(robot_model, "the test robot")
-    frame = run.task.frame_id
-    clik = subprocess.Popen(
-        [sys.executable, "-c", "import sys; from clik.cli import main; sys.exit(main())",
-         "ros", args.scenario, "--duration", str(60.0)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    robot_proc = subprocess.Popen(
-        [sys.executable, __file__, args.scenario, "--robot", "--tau", str(args.tau),
-         "--delay", str(args.delay), "--duration", "120"],
-    )  # fmt: skip
+    clik, robot = _processes(args)
     rclpy.init()
-    node = rclpy.create_node("clik_test_client")
-    latest: dict[str, Any] = {"q": order.angles(run.q0)[0], "commands": []}
-
-    def on_joints(m: Any) -> None:
-        latest["q"] = np.array(m.position)
-
-    node.create_subscription(JointState, settings.joint_states, on_joints, 1)
-
-    def on_command(m: Any) -> None:
-        latest["commands"].append(_command_values(m))
-
-    commands = node.create_subscription(
-        _command_type(settings), settings.output_topic, on_command, 1
-    )
-    answered: dict[str, Any] = {}
-    statuses: list[dict[str, Any]] = []
-    node.create_subscription(
-        Header, f"{settings.prefix}/answered",
-        lambda m: answered.__setitem__("last", (m.stamp.sec, m.stamp.nanosec)), 10,
-    )  # fmt: skip
-    node.create_subscription(
-        String, settings.status, lambda m: statuses.append(json.loads(m.data)), 100
-    )
-    executor = _executor(rclpy)
-    executor.add_node(node)
-
-    def spin(timeout_sec: float) -> None:
-        executor.spin_once(timeout_sec=timeout_sec)
-
-    target = node.create_publisher(PoseStamped, settings.target_topic("task"), 10)
-    twist = node.create_publisher(TwistStamped, settings.twist_topic("task"), 10)
-    start = time.monotonic()
-    while not latest["commands"] and time.monotonic() - start < 30:  # the node is up
-        spin(timeout_sec=0.01)
-    node.destroy_subscription(commands)  # until the hold: fewer callbacks, a faster client
-    dt = run.scenario.solver["dt"]
-    t = np.arange(args.targets) * dt
-    ref = run.trajectory.sample(t)
-    assert ref.position is not None and ref.rotation is not None  # a pose task's circle
-    assert ref.linear_velocity is not None and ref.angular_velocity is not None
-    data = robot_model.model.createData()
-    rtt, errors, refused_at = [], [], args.targets // 2
-    sent = 0
-    for k in range(args.targets):
-        if k == refused_at:  # a NaN: refused by name, the node goes on
-            bad = _pose(np.array([np.nan, 0.0, 0.0]), np.eye(3), node.get_clock().now().to_msg())
-            target.publish(bad)
-        stamp = node.get_clock().now().to_msg()
-        tw = TwistStamped()
-        tw.header.stamp, tw.header.frame_id = stamp, "world"
-        v, w = ref.linear_velocity[k], ref.angular_velocity[k]
-        tw.twist.linear.x, tw.twist.linear.y, tw.twist.linear.z = map(float, v)
-        tw.twist.angular.x, tw.twist.angular.y, tw.twist.angular.z = map(float, w)
-        twist.publish(tw)
-        sent_at = time.perf_counter()
-        target.publish(_pose(ref.position[k], ref.rotation[k], stamp))
-        sent += 1
-        key = (stamp.sec, stamp.nanosec)
-        while answered.get("last") != key and time.perf_counter() - sent_at < 1.0:
-            spin(timeout_sec=0.0005)
-        if answered.get("last") == key:
-            rtt.append(time.perf_counter() - sent_at)
-        elif clik.poll() is not None or k - len(rtt) > 5:  # the node died or does not answer
-            break
-        q = order.configuration(run.q0, latest["q"])
-        pin.framesForwardKinematics(robot_model.model, data, q)
-        errors.append(float(np.linalg.norm(data.oMf[frame].translation - ref.position[k])))
-    # stop sending: the node must hold and say stale
-    pause = time.monotonic()
-    node.create_subscription(_command_type(settings), settings.output_topic, on_command, 10)
-    while time.monotonic() - pause < 1.5 * settings.timeout:
-        spin(timeout_sec=0.005)
-    held_from = len(latest["commands"])
-    while time.monotonic() - pause < 2 * settings.timeout + 0.2:
-        spin(timeout_sec=0.005)
-    held = latest["commands"][held_from:]
+    client = Client(run, settings, JointOrder.of(run.robot, "the test robot"))
+    client.wait_for_node()
+    rtt, errors, sent = _track(client, run, args.targets, clik)
+    held = client.hold()
     clik.terminate()
-    robot_proc.terminate()
+    robot.terminate()
     out, err = clik.communicate(timeout=30)
-    robot_proc.wait(timeout=30)
-    node.destroy_node()
+    robot.wait(timeout=30)
+    client.node.destroy_node()
     rclpy.shutdown()
-    refused = [s["refused"] for s in statuses if s.get("refused")]
-    stale = [s["stale"] for s in statuses if s.get("stale")]
-    del start
-    result = {
-        "sent": sent,
-        "answered": len(rtt),
-        "rtt_ms": {
-            "median": 1e3 * float(np.median(rtt)),
-            "p99": 1e3 * float(np.percentile(rtt, 99)),
-        }
-        if rtt
-        else None,
-        "max_error_m": max(errors[200:]) if len(errors) > 200 else None,
-        "final_error_m": errors[-1],
-        "refused": refused,
-        "stale": stale,
-        "held": bool(held) and all(np.array_equal(c, held[0]) for c in held),
-        "verdicts": sorted({s.get("verdict", "") for s in statuses}),
-        "node_stdout": out[-2000:],
-        "node_stderr": err[-2000:],
-        "rmw": os.environ.get("RMW_IMPLEMENTATION", ""),
-    }
-    print(json.dumps(result))
+    print(json.dumps(_summary(rtt, errors, sent, held, client.statuses, out, err)))
     return 0
 
 

@@ -16,7 +16,7 @@ from clik.errors import InputError
 def cmd_ros(args: argparse.Namespace) -> int:
     """Run ``clik ros`` (see the module docstring)."""
     from clik.ros.node import ClikNode, ros_modules
-    from clik.ros.settings import RosSettings
+    from clik.scenarios.ros_table import RosSettings
     from clik.scenarios.runner import build
 
     ros_modules()  # before the robot loads: a missing rclpy is said first

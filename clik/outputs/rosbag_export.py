@@ -49,6 +49,7 @@ import pinocchio as pin
 
 from clik.errors import ExportError, InputError
 from clik.outputs.export import FORMATS, check_every, decimated, joint_trajectory
+from clik.outputs.goal_check import checked_goals
 from clik.outputs.io import output_errors
 
 if TYPE_CHECKING:
@@ -77,9 +78,6 @@ ROSBAG_VERSION = 9
 REFERENCE_MATCH = 1e-9
 """Largest difference [m] between the primary task's trajectory and its recorded
 reference at the same times for the run to count as not re-timed."""
-
-_POINT_KINDS = ("position", "com")
-_POSE_KINDS = ("pose",)
 
 
 class RosbagsMissing(ExportError):
@@ -175,7 +173,6 @@ def task_targets(
     from clik.tasks.com_task import ComTask
     from clik.tasks.relative_task import RelativeTask
     from clik.tasks.task import Task
-    from clik.viz.task_paths import checked_goals
 
     if not goals:
         return []
@@ -192,10 +189,7 @@ def task_targets(
     targets: list[TaskTarget] = []
     for i, (name, goal) in enumerate(named.items()):
         task = goal.task
-        kind = str(getattr(task, "kind", ""))
-        if goal.trajectory is None or kind not in _POINT_KINDS + _POSE_KINDS:
-            continue
-        if not isinstance(task, Task | RelativeTask | ComTask):
+        if goal.trajectory is None or not isinstance(task, Task | RelativeTask | ComTask):
             continue
         if not getattr(task, "has_position", True):
             continue  # a pose task on orientation axes only: no point to publish
@@ -222,8 +216,9 @@ def task_targets(
 
 def _recorded_targets(result: TrackingResult, model: Any, keep: np.ndarray) -> list[TaskTarget]:
     """Without goals: a one-task position run's target, from its record alone."""
-    if result.info.get("tasks") is not None or result.info.get("task") != "position":
-        return []
+    axes = result.info.get("axes") or []
+    if result.info.get("tasks") is not None or not axes or not set(axes) <= set("xyz"):
+        return []  # several tasks, or a task with orientation rows: not from the record
     if result.reference_position is None:
         return []
     position = np.asarray(result.reference_position, dtype=float)[keep]

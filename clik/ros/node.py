@@ -33,7 +33,7 @@ from clik.control.from_scenario import controller_of, held_target
 from clik.errors import ClikError, InputError
 from clik.model.joint_order import JointOrder
 from clik.ros import messages
-from clik.ros.settings import RosSettings
+from clik.scenarios.ros_table import RosSettings
 from clik.tasks.goal import Goal
 from clik.tasks.posture_task import PostureTask
 from clik.tasks.task import Task
@@ -146,7 +146,7 @@ class ClikNode:
                 ros["TwistStamped"], s.twist_topic(name), self._on_twist(name), 10
             )
         node.create_subscription(ros["JointState"], s.joint_states, self._on_joints, 10)
-        kind = ros["PoseStamped"] if s.obstacle_message == "pose" else ros["PointStamped"]
+        kind = ros["PointStamped"] if s.obstacle_message == "point" else ros["PoseStamped"]
         for name in self.obstacles:
             node.create_subscription(kind, s.obstacle_topic(name), self._on_obstacle(name), 10)
 
@@ -217,7 +217,7 @@ class ClikNode:
         topic, world, pose = (
             self.settings.obstacle_topic(name),
             self.settings.world_frame,
-            self.settings.obstacle_message == "pose",
+            self.settings.obstacle_message != "point",
         )
 
         def read(msg: Any) -> None:
@@ -331,7 +331,7 @@ class ClikNode:
             msg.points = [point]
         else:
             msg = ros["Float64MultiArray"]()
-            msg.data = [float(x) for x in (angles if output == "position" else rates)]
+            msg.data = [float(x) for x in (rates if output == "velocity" else angles)]
         self._command.publish(msg)
 
     def _send_status(self, tick: Any = None, **extra: Any) -> None:

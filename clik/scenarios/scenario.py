@@ -42,8 +42,8 @@ from clik.errors import ScenarioError
 from clik.model.base import BASES, FIXED, check_base_speed
 from clik.model.joints import JointValues
 from clik.model.xacro_expand import is_xacro
-from clik.ros.settings import ros_table
 from clik.scenarios.fields import gain_value
+from clik.scenarios.ros_table import ros_table
 from clik.scenarios.speed_tables import joint_speed_table, velocity_limits_table
 from clik.scenarios.task_tables import finish_tasks, primary, read_objectives, read_tasks
 from clik.scenarios.tolerance import read_tolerance
@@ -107,7 +107,7 @@ class Scenario:
     objectives: list[dict[str, Any]] = field(default_factory=list)
     """The ``[[objectives]]`` tables (eq. (5), law (10))."""
     ros: dict[str, Any] = field(default_factory=dict)
-    """The ``[ros]`` table (:func:`clik.ros.settings.ros_table`): read by ``clik ros``."""
+    """The ``[ros]`` table (:func:`clik.scenarios.ros_table.ros_table`): read by ``clik ros``."""
     raw: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property

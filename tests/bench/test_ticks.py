@@ -149,6 +149,7 @@ def test_missing_peers_are_skipped_with_a_message(quick, monkeypatch, tmp_path):
         return suite.Measured(  # the quick run's other figures, the tick lines run anew
             done["steps"], done["solve"], done["case_study"], done["memory"], done["sweep"],
             done["zoo"], bench_ticks(SHORT, pink, mink, say), done["controller_session"],
+            done["ros"],
         )  # fmt: skip
 
     monkeypatch.setattr(suite, "measure", measure)

@@ -10,7 +10,7 @@ import pytest
 
 from clik.errors import InputError
 from clik.ros import messages
-from clik.ros.settings import RosSettings, ros_table
+from clik.scenarios.ros_table import RosSettings, ros_table
 from clik.schema import Table
 
 WORLD = "world"

@@ -28,11 +28,10 @@ def test_the_loop_answers_tracks_refuses_and_holds(tmp_path: Path) -> None:
     assert out["node_stderr"] == ""
     assert out["answered"] == out["sent"] == 3000  # every target answered
     assert out["rtt_ms"]["median"] < 50.0
-    # the hand on the lagging robot's joints, against the circle: the robot lags 5 ms + 2
-    # ticks behind commands that come a round trip (a few ms) after their target, at up
-    # to 0.31 m/s on this circle: a few millimetres
-    assert out["max_error_m"] < 5e-3
-    assert out["final_error_m"] < 5e-3
+    # the hand on the lagging robot's joints, against the circle (gain 200 1/s, the stable
+    # range of (M4) for this robot): the acceptance bound of the offline lag test
+    assert out["max_error_m"] < 2e-3
+    assert out["final_error_m"] < 2e-3
     refused = out["refused"]
     assert refused and refused[0]["field"] == "/clik/task/target: pose.position"
     assert "finite" in refused[0]["message"]
@@ -47,6 +46,7 @@ def test_the_other_outputs_drive_the_robot(tmp_path: Path, output: str) -> None:
     if why:
         pytest.skip(f"the ROS loop runs only in a private network namespace: {why}")
     out = run_loop(tmp_path, 1000, output)
+    print(json.dumps({k: out[k] for k in ("sent", "answered", "rtt_ms", "max_error_m")}))
     assert out["node_stderr"] == ""
     assert out["answered"] == out["sent"] == 1000
     assert out["max_error_m"] < 5e-3  # the robot integrates velocities, or takes positions

@@ -32,7 +32,8 @@
 #include <nanobind/stl/vector.h>
 
 #include "boundary.hpp"
-#include "loop/measured.hpp"
+#include "loop/measured_input.hpp"
+#include "loop/numpy_forms.hpp"
 #include "loop/py_tick.hpp"
 #include "loop/py_tracking_run.hpp"
 #include "loop/tick_targets.hpp"
@@ -58,48 +59,6 @@ struct TickTolerance {
   double position, orientation, settling;
 };
 
-// A NumPy float64 array read in place: aligned, in the machine's byte order, C-contiguous.
-bool plain_doubles(PyObject* o) {
-  if (!PyArray_Check(o)) return false;
-  auto* a = reinterpret_cast<PyArrayObject*>(o);
-  return PyArray_TYPE(a) == NPY_DOUBLE && PyArray_ISCARRAY_RO(a) && PyArray_ISNOTSWAPPED(a);
-}
-
-// A new NumPy float64 array (n,) holding a copy of v.
-nb::object array_of(const double* v, long n) {
-  npy_intp size = n;
-  PyObject* a = PyArray_SimpleNew(1, &size, NPY_DOUBLE);
-  if (a == nullptr) throw nb::python_error();
-  std::memcpy(PyArray_DATA(reinterpret_cast<PyArrayObject*>(a)), v,
-              static_cast<std::size_t>(n) * sizeof(double));
-  return nb::steal(a);
-}
-
-// ``shape (16,)`` as Python writes a shape.
-std::string shape_words(const Floats& f) {
-  std::string s = "shape (";
-  for (int i = 0; i < f.ndim; ++i) s += (i ? ", " : "") + std::to_string(f.shape[i]);
-  return s + (f.ndim == 1 ? ",)" : ")");
-}
-
-// The values of a 0-, 1- or 2-D form as Python gives them (a number, a list of lists).
-nb::object values_of(const Floats& f) {
-  if (f.ndim == 0) return nb::float_(f.values[0]);
-  nb::list out;
-  if (f.ndim == 1) {
-    for (long i = 0; i < f.shape[0]; ++i) out.append(f.values[static_cast<std::size_t>(i)]);
-    return out;
-  }
-  for (long i = 0; i < f.shape[0]; ++i) {
-    nb::list row;
-    for (long j = 0; j < f.shape[1]; ++j) {
-      row.append(f.values[static_cast<std::size_t>(i * f.shape[1] + j)]);
-    }
-    out.append(row);
-  }
-  return out;
-}
-
 struct PyTicker {
   nb::object turn_ref;  // the controller's Turn (shared with its other methods)
   Turn* turn;
@@ -112,12 +71,7 @@ struct PyTicker {
   std::vector<nb::object> fields, velocity_fields;  // "targets['name']", "velocities['name']"
   TickTolerance tol;
   nb::object verdicts[VERDICT_COUNT], no_reason;
-  // the measured joints (clik/control/measured.py): checks, (M3), and their words
-  std::unique_ptr<Measured> measured;
-  long measured_bound_size = 0;  // nv
-  double rotation_tolerance = 0.0;
-  nb::object q_field, qdot_field, measured_words, measured_velocity_words;
-  std::vector<nb::object> rotation_words;  // what each rotation of q must be
+  MeasuredInput mi;  // q_measured, qdot_measured (loop/measured_input.hpp)
 
   // the session (restart)
   nb::object owner;  // the PyTrackingRun (kept alive)
@@ -132,13 +86,6 @@ struct PyTicker {
   double wall = 0.0;  // time in the ticks [s]
   double above_since = std::numeric_limits<double>::quiet_NaN();
   Advance last;
-  // this session's record of the measured joints (the MeasuredJoints' arrays, written)
-  WrittenArray<double> rec_commanded, rec_measured, rec_qdot_measured;
-  long measured_given = 0;  // ticks given q_measured
-  // this tick's: q_measured and qdot_measured given, a jump (M3), q_k before it
-  bool has_q = false, has_qdot = false, jumped = false;
-  Jump jump;
-  Vec commanded;
 
   void must_hold(const char* who) const {
     if (!turn->mine()) throw std::logic_error(std::string(who) + ": the controller's turn");
@@ -196,7 +143,7 @@ struct PyTicker {
         if (n == 1) return map;
         raise(nb::str(field),
               std::string("a mapping of task name to ") + (every ? "target" : "velocity") +
-                  " (" + joined() + ")",
+                  " (" + joined(task_names) + ")",
               value);
       }
     }
@@ -208,7 +155,7 @@ struct PyTicker {
     }
     if (PyDict_Size(map.ptr()) > found) unknown_key(map, field);
     if (every && found < n) {
-      raise(nb::str(field), "a target for every task (" + joined() + ")", nb::none());
+      raise(nb::str(field), "a target for every task (" + joined(task_names) + ")", nb::none());
     }
     return map;
   }
@@ -233,98 +180,21 @@ struct PyTicker {
     throw std::logic_error("Ticker: a mapping with a key that names no task");
   }
 
-  // The value of task `name` in a mapping (None: left out).
-  static nb::object item(const nb::object& map, nb::handle name) {
-    PyObject* v = PyDict_GetItemWithError(map.ptr(), name.ptr());
-    if (v == nullptr && PyErr_Occurred()) throw nb::python_error();
-    return v == nullptr ? nb::none() : nb::borrow(v);
-  }
-
   void stage_all(nb::handle targets_in, nb::handle velocities_in) {
     const nb::object tmap = by_name(targets_in, "targets", true);
     const bool moving = !velocities_in.is_none();
     const nb::object vmap = moving ? by_name(velocities_in, "velocities", false) : nb::none();
     for (int i = 0; i < targets->count(); ++i) {
       const nb::handle name = task_names[static_cast<std::size_t>(i)];
-      stage(i, tmap.is_none() ? nb::borrow(targets_in) : item(tmap, name), false);
+      stage(i, tmap.is_none() ? nb::borrow(targets_in) : dict_item(tmap, name), false);
       const nb::object velocity =
-          !moving ? nb::none() : vmap.is_none() ? nb::borrow(velocities_in) : item(vmap, name);
+          !moving ? nb::none() : vmap.is_none() ? nb::borrow(velocities_in) : dict_item(vmap, name);
       if (velocity.is_none()) {
         targets->velocity(i).given = false;
       } else {
         stage(i, velocity, true);
       }
     }
-  }
-
-  // q_measured (qdot_measured) into the measured buffer of n values: the same checks, in
-  // the same order, as MeasuredJoints.stage (shape, finite, rotations).
-  void stage_joints(nb::handle value, bool velocity) {
-    const nb::object& field = velocity ? qdot_field : q_field;
-    const nb::object& words = velocity ? measured_velocity_words : measured_words;
-    Vec& out = velocity ? measured->qdot() : measured->q();
-    nb::object converted;
-    PyObject* o = value.ptr();
-    if (!plain_doubles(o)) {  // Python code may run here: nothing of the ticker is held
-      converted = convert(value, field, words);
-      o = converted.ptr();
-      if (!plain_doubles(o)) throw std::logic_error("as_floats: a float64 C-contiguous array");
-    }
-    auto* a = reinterpret_cast<PyArrayObject*>(o);
-    if (PyArray_NDIM(a) != 1 || PyArray_DIMS(a)[0] != out.size()) {
-      nb::object shape = nb::borrow(PyArray_Shape_of(a));
-      raise(field, nb::cast<std::string>(words), nb::str(("shape " + nb::cast<std::string>(nb::repr(shape))).c_str()));
-    }
-    std::memcpy(out.data(), PyArray_DATA(a), static_cast<std::size_t>(out.size()) * sizeof(double));
-    if (!out.allFinite()) {
-      raise(field, "finite numbers: " + nb::cast<std::string>(words), list_of(out, 0, out.size()));
-    }
-    if (velocity) return;
-    long bad = 0;
-    if (!measured->unit_rotations(rotation_tolerance, bad)) {
-      const Rotation& r = measured->rotations()[static_cast<std::size_t>(bad)];
-      raise(field, nb::cast<std::string>(rotation_words[static_cast<std::size_t>(bad)]),
-            list_of(out, r.start, r.size));
-    }
-  }
-
-  static nb::object PyArray_Shape_of(PyArrayObject* a) {
-    nb::list dims;
-    for (int d = 0; d < PyArray_NDIM(a); ++d) dims.append(static_cast<long>(PyArray_DIMS(a)[d]));
-    return nb::tuple(dims);
-  }
-
-  static nb::object list_of(const Vec& v, long start, long n) {
-    nb::list out;
-    for (long i = start; i < start + n; ++i) out.append(v[i]);
-    return out;
-  }
-
-  // qdot_measured needs q_measured: refused as MeasuredJoints.stage refuses it.
-  void stage_measured(nb::handle q_in, nb::handle qdot_in) {
-    has_q = !q_in.is_none();
-    has_qdot = !qdot_in.is_none();
-    if (!has_q && has_qdot) raise(qdot_field, "given with q_measured", nb::str("no q_measured"));
-    if (has_q) stage_joints(q_in, false);
-    if (has_qdot) stage_joints(qdot_in, true);
-  }
-
-  // Record slot j of the measured joints (NaN: none given), as MeasuredJoints.keep.
-  void keep_measured(long j) {
-    const long nq = commanded.size(), nv = measured->qdot().size();
-    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-    VecMap(rec_commanded.data() + j * nq, nq) = commanded;
-    VecMap m(rec_measured.data() + j * nq, nq), md(rec_qdot_measured.data() + j * nv, nv);
-    if (has_q) m = measured->q(); else m.setConstant(nan);
-    if (has_qdot) md = measured->qdot(); else md.setConstant(nan);
-  }
-
-  std::string joined() const {
-    std::string s;
-    for (nb::handle name : task_names) {
-      s += (s.empty() ? "" : ", ") + nb::cast<std::string>(nb::str(name));
-    }
-    return s;
   }
 
   // -- phase 3: read and run -------------------------------------------------------------
@@ -336,7 +206,7 @@ struct PyTicker {
     notes = r.monitor().notes();
     if (last.stop == Stop::deadlock || last.stop == Stop::stall) return deadlock;
     if (last.stop != Stop::none) return diverged;
-    if (jumped) return measurement_jump;
+    if (mi.jumped) return measurement_jump;
     if (notes != before) return violated;
     const TaskConfig& task = r.task();
     const double limit = task.has_position ? tol.position : tol.orientation;
@@ -374,7 +244,7 @@ struct PyTicker {
       turn_held.emplace(*turn, "Controller.step");
     }
     stage_all(targets_in, velocities_in);
-    stage_measured(q_in, qdot_in);
+    mi.stage(q_in, qdot_in);
     if (!(ModelShape::of(*model) == run->built)) {  // changed meanwhile: named by the robot
       check_model();
       raise(nb::str("robot.model"), "the model the controller was built on", nb::none());
@@ -389,27 +259,27 @@ struct PyTicker {
     const auto start = std::chrono::steady_clock::now();
     const long k = run->next;
     TrackingRun& r = *run->run;
-    commanded = q;  // q_k, the controller's own
-    jumped = false;
-    if (has_q) {  // (M1): the law runs at q_m unless (M3) refuses it
-      ++measured_given;
-      jumped = measured->jumped(*model, k, jump);
-      if (!jumped) q = measured->q();
+    mi.commanded = q;  // q_k, the controller's own
+    mi.jumped = false;
+    if (mi.has_q) {  // (M1): the law runs at q_m unless (M3) refuses it
+      ++mi.given;
+      mi.jumped = mi.measured->jumped(*model, k, mi.jump);
+      if (!mi.jumped) q = mi.measured->q();
     }
     const long kept = r.kept();
     last = r.advance(k, k + 1, targets->P_d(), targets->R_d(), targets->FF(),
                      targets->at_rest(), q, targets->goal_ref(), targets->goal_ff());
     run->next = last.next;
-    if (has_q && !jumped) {  // (M2): q_{k+1} = q_k (+) qdot_k dt, or q_k held (diverged)
+    if (mi.has_q && !mi.jumped) {  // (M2): q_{k+1} = q_k (+) qdot_k dt, or q_k held (diverged)
       const bool held =
           last.stop != Stop::none && last.stop != Stop::deadlock && last.stop != Stop::stall;
       if (held) {
-        q = commanded;
+        q = mi.commanded;
       } else {
-        measured->integrate(*model, commanded, r.qdot(), q);
+        mi.measured->integrate(*model, mi.commanded, r.qdot(), q);
       }
     }
-    if (r.kept() != kept) keep_measured(kept % rec_commanded.shape(0));
+    if (r.kept() != kept) mi.keep(kept % mi.rec_commanded.shape(0));
     const double tk = r.time(k);
     out.code = judge(tk);
     out.t = tk;
@@ -437,7 +307,8 @@ struct PyTicker {
     wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (out.code != ok) {  // its reason, in Python (nothing of the engine held)
       nb::object jumped_tuple = nb::none();
-      if (jumped) jumped_tuple = nb::make_tuple(jump.i, jump.size, jump.limit, jump.k_accepted, jump.n);
+      const Jump& j = mi.jump;
+      if (mi.jumped) jumped_tuple = nb::make_tuple(j.i, j.size, j.limit, j.k_accepted, j.n);
       nb::object reason = explain(tick, stop_tuple(), above_since, jumped_tuple);
       nb::inst_ptr<PyTick>(tick)->reason = std::move(reason);
     }
@@ -465,7 +336,7 @@ struct PyTicker {
                 fits(qdot_measured, r.record.nv()),
             "Ticker.restart: the measured record (capacity, nq), (capacity, nq), "
             "(capacity, nv)");
-    require(r.record.nv() == measured_bound_size, "Ticker.restart: the jump bound (nv,)");
+    require(r.record.nv() == mi.bound_size, "Ticker.restart: the jump bound (nv,)");
     const pinocchio::Model& m = borrow_model(r.model.ptr());
     require_same_model(r.built, m, "Ticker.restart");
     auto in = std::make_unique<TickTargets>(*r.run);
@@ -490,13 +361,13 @@ struct PyTicker {
     target_words = std::move(tw);
     velocity_words = std::move(vw);
     q = q0;
-    measured->restart(q0);
-    commanded = q0;
-    rec_commanded = std::move(q_commanded);
-    rec_measured = std::move(q_measured);
-    rec_qdot_measured = std::move(qdot_measured);
-    measured_given = 0;
-    has_q = has_qdot = jumped = false;
+    mi.measured->restart(q0);
+    mi.commanded = q0;
+    mi.rec_commanded = std::move(q_commanded);
+    mi.rec_measured = std::move(q_measured);
+    mi.rec_qdot_measured = std::move(qdot_measured);
+    mi.given = 0;
+    mi.has_q = mi.has_qdot = mi.jumped = false;
     constraint_names = nb::tuple(names);
     notes = 0;
     wall = 0.0;
@@ -521,6 +392,8 @@ void make_ticker(PyTicker* self, nb::object turn, nb::object refuse, nb::object 
   self->turn = &t;
   self->refuse = std::move(refuse);
   self->convert = std::move(convert);
+  self->mi.refuse = self->refuse;
+  self->mi.convert = self->convert;
   self->as_mapping = std::move(as_mapping);
   self->check_model = std::move(check_model);
   nb::list task_names;
@@ -547,16 +420,16 @@ void make_ticker(PyTicker* self, nb::object turn, nb::object refuse, nb::object 
     const Rotation rot{nb::cast<long>(t[0]), nb::cast<long>(t[1])};
     require(rot.start >= 0 && (rot.size == 2 || rot.size == 4), "Ticker: a rotation's start, size");
     rs.push_back(rot);
-    self->rotation_words.push_back(nb::borrow(t[2]));
+    self->mi.rotation_words.push_back(nb::borrow(t[2]));
   }
   require(finite_positive(dt), "Ticker: dt > 0 [s]");
-  self->measured = std::make_unique<Measured>(Vec(jump_bound), std::move(rs), dt);
-  self->measured_bound_size = static_cast<long>(jump_bound.size());
-  self->rotation_tolerance = rotation_tolerance;
-  self->q_field = nb::str("q_measured");
-  self->qdot_field = nb::str("qdot_measured");
-  self->measured_words = nb::str(measured_words.c_str());
-  self->measured_velocity_words = nb::str(measured_velocity_words.c_str());
+  self->mi.measured = std::make_unique<Measured>(Vec(jump_bound), std::move(rs), dt);
+  self->mi.bound_size = static_cast<long>(jump_bound.size());
+  self->mi.rotation_tolerance = rotation_tolerance;
+  self->mi.q_field = nb::str("q_measured");
+  self->mi.qdot_field = nb::str("qdot_measured");
+  self->mi.words = nb::str(measured_words.c_str());
+  self->mi.velocity_words = nb::str(measured_velocity_words.c_str());
   self->no_reason = nb::str("");
 }
 
@@ -612,7 +485,7 @@ void bind_ticker(nb::module_& m) {
                    "The next tick's index.")
       .def_prop_ro("q", [](const PyTicker& s) { return array_of(s.q.data(), s.q.size()); },
                    "The joints the next tick starts from (a copy).")
-      .def_prop_ro("measured_given", [](const PyTicker& s) { return s.measured_given; },
+      .def_prop_ro("measured_given", [](const PyTicker& s) { return s.mi.given; },
                    "Ticks of this session given q_measured.")
       .def_prop_ro("wall", [](const PyTicker& s) { return s.wall; },
                    "Time spent in the ticks of this session [s].");
