@@ -10,10 +10,12 @@ The robot (a node in this process) echoes the commands as joint states after ``-
 ticks and a first-order lag of ``--tau`` seconds, at 1 kHz. The client sends the
 scenario's reference one target at a time (pose and twist, stamped), waits for the node's
 ``answered`` header carrying that stamp (the round trip), then sends the next. Midway it
-sends a pose with a NaN (the status must name it) and at the end it stops for twice the
+sends a pose with a NaN (the status must name it); then, for 1 s, a target 3 m up, out
+of reach (the status must say the verdict and why); at the end it stops for twice the
 timeout (the status must say stale, and the commands hold). The JSON: ``sent``,
 ``answered``, ``rtt_ms`` (median, p99), ``max_error_m``, ``final_error_m`` (the hand on
-the robot's joints against the reference), ``refused``, ``stale``, ``held``.
+the robot's joints against the reference), ``refused``, ``verdicts`` (while tracking),
+``blocked`` (the statuses the target out of reach brought), ``stale``, ``held``.
 """
 
 from __future__ import annotations
@@ -201,6 +203,17 @@ class Client:
         pin.framesForwardKinematics(model, data, self.order.configuration(self.run.q0, self.q))
         return float(np.linalg.norm(data.oMf[frame].translation - reference))
 
+    def blocked(self, seconds: float) -> list[dict[str, Any]]:
+        """A target out of reach (3 m up), sent every 5 ms: the statuses it brings."""
+        start = len(self.statuses)
+        far = np.array([0.0, 0.0, 3.0])
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            stamp = self.node.get_clock().now().to_msg()
+            self.target.publish(_pose(far, np.eye(3), stamp))
+            self.spin(0.005)
+        return [s for s in self.statuses[start:] if s.get("verdict", "ok") != "ok"]
+
     def hold(self) -> list[np.ndarray]:
         """Stop sending: the commands after 1.5 timeouts (the node holds by then)."""
         self.listening = self.node.create_subscription(
@@ -280,6 +293,8 @@ def main() -> int:
     client = Client(run, settings, JointOrder.of(run.robot, "the test robot"))
     client.wait_for_node()
     rtt, errors, sent = _track(client, run, args.targets, clik)
+    tracked = sorted({s.get("verdict", "") for s in client.statuses})
+    blocked = client.blocked(1.0)  # longer than the settling time (0.5 s)
     held = client.hold()
     clik.terminate()
     robot.terminate()
@@ -287,7 +302,15 @@ def main() -> int:
     robot.wait(timeout=30)
     client.node.destroy_node()
     rclpy.shutdown()
-    print(json.dumps(_summary(rtt, errors, sent, held, client.statuses, out, err)))
+    print(
+        json.dumps(
+            {
+                **_summary(rtt, errors, sent, held, client.statuses, out, err),
+                "verdicts": tracked,
+                "blocked": blocked,
+            }
+        )
+    )
     return 0
 
 

@@ -37,7 +37,10 @@ def test_the_loop_answers_tracks_refuses_and_holds(tmp_path: Path) -> None:
     assert "finite" in refused[0]["message"]
     assert any("/clik/task/target" in s for s in out["stale"])  # said when the targets stop
     assert out["held"]  # and the command held
-    assert out["verdicts"] == ["ok"]
+    assert out["verdicts"] == ["ok"]  # while tracking
+    blocked = out["blocked"]  # a target out of reach: said, with its reason
+    assert blocked and blocked[0]["verdict"] in ("deadlock", "off_track")
+    assert blocked[0]["reason"]
 
 
 @pytest.mark.parametrize("output", ["position", "velocity"])
