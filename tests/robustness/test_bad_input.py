@@ -1166,7 +1166,8 @@ def test_every_error_class_is_in_the_errors_page_with_its_exit_code():
     section = section.split("\n## ", 1)[0]
     rows = [line for line in section.splitlines() if line.startswith("| `")]
 
-    for module in pkgutil.walk_packages(clik.__path__, "clik."):
+    # clik's own folder (an editable install's clik.__path__ holds the checkout's root too)
+    for module in pkgutil.walk_packages([str(Path(clik.__file__).parent)], "clik."):
         importlib.import_module(module.name)  # every error class clik defines is loaded
 
     def subclasses(cls: type) -> list[type]:
