@@ -1,24 +1,27 @@
-"""From a checked MJCF (MuJoCo) model to Pinocchio's models.
+"""From a checked MJCF (MuJoCo) model to Pinocchio's models, through MuJoCo's compiler.
 
 :func:`clik.model.mjcf_check.check_mjcf` checks the model and every file it reads and
-returns one self-contained document; Pinocchio's MJCF reader reads that document
-(written to a private temporary file, its mesh files as checked absolute paths), never
-the user's files directly. What clik takes from it:
+returns one self-contained document; MuJoCo's compiler (``mujoco.MjModel``) compiles
+it exactly as MuJoCo does (default classes, w-first quaternions, ``eulerseq``,
+``fromto``, mesh scales, joint ``ref``, ``<compiler>`` settings), and clik builds its
+models from the compiled numbers, never from its own reading of the XML:
 
-- **Kinematics**: hinge joints are revolute, slide joints prismatic; ranges in the
-  file's angle unit (``<compiler angle>``, degrees by default, as MuJoCo). Pinocchio
-  4.1 converts a slide joint's range as if it were an angle in a degree model; the
-  range is set back to metres here. MJCF gives no joint velocity limits: runs use
+- **Kinematics** (:mod:`clik.model.mjcf_compiled`): hinge joints are revolute, slide
+  joints prismatic, clik's joint value is MuJoCo's ``qpos``; a body with several joints
+  is a chain of one-degree-of-freedom joints; ranges as MuJoCo compiled them (radians,
+  metres). MJCF gives no joint velocity limits: runs use
   ``joint_speed.default_velocity`` (warned) unless ``joint_speed.velocity`` gives them.
-- **Collision geometry**: a geom is collision geometry unless it has both
-  ``contype="0"`` and ``conaffinity="0"`` (those are visual only); a geom of
-  ``group`` 3 or more is collision only (Pinocchio's reading). Planes (a scene's
-  floor) are dropped: the environment is given as obstacles. Mesh files become
-  convex hulls in the collision scene, like a URDF's; an ellipsoid is skipped there
+  A ball joint is refused, naming its body.
+- **Collision geometry** (:mod:`clik.model.mjcf_geometry`): a geom is collision
+  geometry unless it has both ``contype="0"`` and ``conaffinity="0"``; the visual
+  geometry is the geoms of ``group`` 0 to 2. Each sits at MuJoCo's compiled pose with
+  MuJoCo's sizes, a mesh as MuJoCo compiled it (scaled, centred). Planes (a scene's
+  floor) are dropped: the environment is given as obstacles. Mesh geoms become convex
+  hulls in the collision scene (as MuJoCo collides them); an ellipsoid is skipped there
   with a warning (no convex shape for it).
 - **Reference configuration**: the ``<key name="home">`` of ``<keyframe>`` if
-  there is one (clipped into the limits, warned), else Pinocchio's neutral
-  configuration (all zeros) clipped into the limits.
+  there is one (clipped into the limits, warned), else MuJoCo's ``qpos0`` (each
+  joint's ``ref``, zero by default) clipped into the limits.
 - **Base** (``Robot.load(..., base=...)``, :mod:`clik.model.base`): the root body's
   free joint (``<freejoint/>``) is removed from the document, and so is its pose;
   clik places the root body itself (:func:`place_root`):
@@ -40,25 +43,23 @@ the user's files directly. What clik takes from it:
 from __future__ import annotations
 
 import math
-import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from clik.errors import InputError, RobotLoadError, native_message
+from clik.errors import InputError, RobotLoadError
 from clik.model.base import (
-    BASE_JOINT,
     FIXED,
     FLOATING,
     PLANAR,
     planar_from_free_flyer,
-    root_joint,
 )
-from clik.model.joints import PRISMATIC, joint_kind
 from clik.model.loading import check_mesh_extents, clipped_reference
 from clik.model.mjcf_check import check_mjcf
+from clik.model.mjcf_compiled import build_model, compile_text, se3
+from clik.model.mjcf_geometry import build_geometry
 from clik.model.mjcf_root import FREE_JOINT_VALUES, HOME_KEY, MjcfDocument
 
 
@@ -84,9 +85,9 @@ def load_mjcf(
     Raises:
         InputError: An option in ``refused`` was given.
         RobotLoadError: The model or a file it reads is refused
-            (:func:`~clik.model.mjcf_check.check_mjcf`), Pinocchio cannot read it, it
-            has a joint of more than one degree of freedom, or its ``home`` key does not
-            hold one value per joint.
+            (:func:`~clik.model.mjcf_check.check_mjcf`), MuJoCo's compiler refuses it
+            (its message, at the file and line of the element), it has a ball joint, or
+            its ``home`` key does not hold one value per joint.
 
     Warns:
         FreeJointWeldedWarning: With a fixed base, the root body's free joint was removed.
@@ -116,7 +117,7 @@ def mjcf_visual_model(
             with locked joints, or None.
 
     Raises:
-        RobotLoadError: Pinocchio cannot read it (a mesh removed since loading, ...).
+        RobotLoadError: MuJoCo's compiler cannot read it (a mesh removed since loading, ...).
     """
     visual = _read(document, pin.VISUAL, full_model)[1]
     if reduction is not None:
@@ -126,7 +127,7 @@ def mjcf_visual_model(
 
 
 def reference_configuration(model: pin.Model, document: MjcfDocument) -> np.ndarray:
-    """The ``home`` key if the model has one, else neutral; clipped into the limits.
+    """The ``home`` key if the model has one, else MuJoCo's ``qpos0``; clipped into the limits.
 
     A planar or floating base starts at :func:`base_pose` (the ``home`` key's free joint,
     else the file's pose of the root body): floating, Pinocchio's ``x, y, z, q_x, q_y,
@@ -139,14 +140,14 @@ def reference_configuration(model: pin.Model, document: MjcfDocument) -> np.ndar
         if HOME_KEY in model.referenceConfigurations:
             q = np.array(model.referenceConfigurations[HOME_KEY], dtype=float)
             return clipped_reference(model, q, HOME_KEY)
-        return np.clip(pin.neutral(model), model.lowerPositionLimit, model.upperPositionLimit)
+        return np.clip(_qpos0(model, document), model.lowerPositionLimit, model.upperPositionLimit)
     n_base = model.joints[1].nq
     pose = np.asarray(pin.SE3ToXYZQUAT(base_pose(document)), dtype=float)
     q = pin.neutral(model)
     q[:n_base] = planar_from_free_flyer(pose) if document.base == PLANAR else pose
     if document.home_joints is None:
         low, high = model.lowerPositionLimit[n_base:], model.upperPositionLimit[n_base:]
-        q[n_base:] = np.clip(q[n_base:], low, high)
+        q[n_base:] = np.clip(_qpos0(model, document)[n_base:], low, high)
         return q
     if len(document.home_joints) != model.nq - n_base:
         after = f" after the free joint's {FREE_JOINT_VALUES}" if document.welded else ""
@@ -159,29 +160,30 @@ def reference_configuration(model: pin.Model, document: MjcfDocument) -> np.ndar
     return clipped_reference(model, q, HOME_KEY)
 
 
+def _qpos0(model: pin.Model, document: MjcfDocument) -> np.ndarray:
+    """MuJoCo's ``qpos0`` of the joints (their ``ref``) after the base's values (neutral)."""
+    q = pin.neutral(model)
+    if document.qpos0 is not None:
+        q[model.nq - len(document.qpos0) :] = document.qpos0
+    return q
+
+
 def root_placement(document: MjcfDocument) -> pin.SE3:
     """The pose the file gives its root body in the world (identity when it gives none).
 
-    Read by Pinocchio from :attr:`MjcfDocument.root_probe
-    <clik.model.mjcf_root.MjcfDocument.root_probe>` (the placement of a hinge in a body
-    with the root body's pose attributes), so every orientation form (``quat``,
-    ``euler`` with the file's ``eulerseq``, ``axisangle``, ``xyaxes``, ``zaxis``) and the
-    file's angle unit are read as for every other body.
+    Compiled by MuJoCo from :attr:`MjcfDocument.root_probe
+    <clik.model.mjcf_root.MjcfDocument.root_probe>` (a body with the root body's pose
+    attributes), so every orientation form (``quat``, ``euler`` with the file's
+    ``eulerseq``, ``axisangle``, ``xyaxes``, ``zaxis``) and the file's angle unit are read
+    as MuJoCo reads them.
 
     Raises:
-        RobotLoadError: Pinocchio cannot read it.
+        RobotLoadError: MuJoCo's compiler refuses it.
     """
     if document.root_probe is None:
         return pin.SE3.Identity()
-    with tempfile.TemporaryDirectory(prefix="clik-mjcf-") as folder:
-        file = Path(folder, "probe.xml")
-        file.write_text(document.root_probe, encoding="utf-8")
-        try:
-            probe = pin.buildModelFromMJCF(str(file))
-        except (ValueError, RuntimeError, KeyError, IndexError) as error:
-            problem = f"Pinocchio cannot read the root body's pose: {native_message(error)}"
-            raise RobotLoadError(document.path, problem) from None
-    placement = pin.SE3(probe.jointPlacements[1])
+    probe = compile_text(document.root_probe, document.path)
+    placement = se3(probe.body_pos[1], probe.body_quat[1])
     if not all(math.isfinite(v) for v in np.ravel(placement.homogeneous)):
         raise RobotLoadError(document.path, "the root body's pose is not finite")
     return placement
@@ -248,65 +250,17 @@ def _attach(model: pin.Model, joint: int, placement: pin.SE3) -> None:
 def _read(
     document: MjcfDocument, kind: pin.GeometryType, model: pin.Model | None = None
 ) -> tuple[pin.Model, pin.GeometryModel]:
-    """Pinocchio's model (unless given) and geometry of ``kind``, planes dropped."""
-    what = "model" if model is None else "visual geometry"
-    with tempfile.TemporaryDirectory(prefix="clik-mjcf-") as folder:
-        file = Path(folder, "model.xml")
-        file.write_text(document.text, encoding="utf-8")
-        try:
-            if model is None:
-                root = root_joint(document.base)
-                model = (
-                    pin.buildModelFromMJCF(str(file))
-                    if root is None
-                    else pin.buildModelFromMJCFAndRootJoint(str(file), root, BASE_JOINT)
-                )
-                _metres(model, document)
-                place_root(model, document)
-            geometry = pin.buildGeomFromMJCF(model, str(file), kind)
-        except (ValueError, RuntimeError, KeyError, IndexError) as error:
-            problem = f"Pinocchio cannot read the {what}: {native_message(error)}"
-            raise RobotLoadError(document.path, problem) from None
-    return model, _without_planes(geometry)
-
-
-def _metres(model: pin.Model, document: MjcfDocument) -> None:
-    """Undo Pinocchio 4.1's degree conversion of slide joint ranges (they are metres)."""
-    if not document.degrees:
-        return
-    lower, upper = model.lowerPositionLimit.copy(), model.upperPositionLimit.copy()
-    for joint in model.joints[1:]:
-        if joint_kind(joint) == PRISMATIC:
-            i = joint.idx_q
-            lower[i], upper[i] = np.degrees(lower[i]), np.degrees(upper[i])
-    model.lowerPositionLimit, model.upperPositionLimit = lower, upper
-
-
-def _without_planes(geometry: pin.GeometryModel) -> pin.GeometryModel:
-    """The geometry without its planes (coal half-spaces: a floor, not part of the robot)."""
-    kept = pin.GeometryModel()
-    for go in geometry.geometryObjects:
-        if type(go.geometry).__name__ not in ("Halfspace", "Plane"):
-            kept.addGeometryObject(go)
-    return kept
+    """The model built from MuJoCo's compiled one (unless given) and its geometry of ``kind``."""
+    compiled = compile_text(document.text, document.path, document.lines)
+    if model is None:
+        model = build_model(compiled, document)
+        document.qpos0 = [float(v) for v in compiled.qpos0]
+        place_root(model, document)
+    return model, build_geometry(compiled, model, kind)
 
 
 def _check_joints(model: pin.Model, document: MjcfDocument) -> None:
-    """Every joint one degree of freedom (but the base's), finite placements, ``lower <= upper``."""
-    first = 1 if document.base == FIXED else 2  # a planar or floating base's root joint
-    for name, joint in zip(model.names[first:], model.joints[first:], strict=True):
-        if joint.nq != 1 or joint.nv != 1:
-            raise RobotLoadError(
-                document.path,
-                f"joint {str(name)!r} has {joint.nv} degrees of freedom "
-                f"({joint.shortname()}): clik loads hinge and slide joints",
-            )
-        low = float(model.lowerPositionLimit[joint.idx_q])
-        high = float(model.upperPositionLimit[joint.idx_q])
-        if low > high:
-            raise RobotLoadError(
-                document.path, f"joint {str(name)!r} has range [{low:g}, {high:g}]: lower > upper"
-            )
+    """Finite joint placements (MuJoCo's compiler checked the rest: ranges, axes)."""
     for name, placement in zip(model.names, model.jointPlacements, strict=True):
         if not all(math.isfinite(v) for v in np.ravel(placement.homogeneous)):
             raise RobotLoadError(document.path, f"joint {str(name)!r} has a non-finite placement")

@@ -1,11 +1,9 @@
-"""Strict checks on an MJCF (MuJoCo) model before Pinocchio reads it, and its expansion.
+"""Strict checks on an MJCF (MuJoCo) model before MuJoCo's compiler reads it.
 
-Pinocchio's MJCF reader (``pin.buildModelFromMJCF``) reads one file: it does not
-follow ``<include>``, reads only the first ``<compiler>``, ``<default>``, ``<asset>``,
-``<worldbody>`` and ``<keyframe>`` of the file, only the first ``<body>`` of the
-world, and reads mesh files through ``<compiler meshdir=... assetdir=...>``.
-:func:`check_mjcf` reads the model the way MuJoCo does and hands Pinocchio one
-self-contained document (:class:`MjcfDocument`):
+:func:`check_mjcf` reads the model and every file it names with clik's strict XML
+reader and hands MuJoCo's compiler (:mod:`clik.model.mjcf_compiled`) one
+self-contained document (:class:`MjcfDocument`); MuJoCo never opens the user's files
+itself but the checked mesh files:
 
 - every file is parsed by :func:`clik.model.urdf_check.parse_xml` (no entities,
   no external DTD, no XInclude, the byte, element and attribute budgets);
@@ -13,34 +11,31 @@ self-contained document (:class:`MjcfDocument`):
   file's ``<mujoco>``, recursively, paths relative to the main file's folder (as
   MuJoCo reads them), at most :data:`MAX_INCLUDES` files, :data:`MAX_INCLUDE_DEPTH`
   deep, each file once;
-- the sections Pinocchio reads once are merged (later ``<compiler>`` attributes
-  override earlier ones, other sections' children are appended);
+- repeated sections are merged (later ``<compiler>`` attributes override earlier
+  ones, other sections' children are appended), as MuJoCo reads them;
 - mesh and texture files are located as MuJoCo does (``meshdir``, ``texturedir``,
   ``assetdir``, ``strippath``), checked (:func:`clik.model.mesh_check.check_mesh_file`
   for meshes: regular file, format, size, counts, an OBJ's ``mtllib`` files) and
-  written into the document as absolute paths;
+  written into the document as absolute paths. A missing mesh used only by visual
+  geoms (``contype="0" conaffinity="0"``) is warned
+  (:class:`~clik.model.visual_meshes.MissingVisualMeshWarning`) and those geoms are
+  left out, as for a URDF's visual meshes; a missing collision mesh is refused;
 - every file read (the includes, meshes, textures, an OBJ's material files) must
   resolve, symlinks followed, inside the main file's folder;
 - numbers of bodies, joints, geoms, sites, inertials, meshes and keys are finite
-  and in range, joint ranges ``lower <= upper``, a joint ``ref`` is 0
-  (:mod:`clik.model.mjcf_numbers`), and each primitive geom gets the sizes its shape
-  needs (:mod:`clik.model.mjcf_geoms`); an upper-case (extrinsic) ``eulerseq``, which
-  Pinocchio reads as intrinsic, is refused;
-- elements Pinocchio would skip while they change the robot (``<frame>``,
-  ``<replicate>``, ``<attach>``, ``<composite>``, ``<flexcomp>``, height fields, ball
-  joints, a second body in the world) are refused;
+  and in range, joint ranges ``lower <= upper`` (:mod:`clik.model.mjcf_numbers`), and
+  each primitive geom gets the sizes its shape needs (:mod:`clik.model.mjcf_geoms`);
+- elements that would change the robot in ways clik does not load (``<frame>`` or
+  ``<replicate>`` directly in the world, ``<attach>``, ``<composite>``,
+  ``<flexcomp>``, height fields, ball joints, a second body in the world) are refused;
 - the root body's free joint is removed (its 7 ``qpos`` values leave every key:
   :attr:`MjcfDocument.home_base` keeps the ``home`` key's), and so is the root body's
-  pose (``pos``, ``quat``, ``euler``, ...: Pinocchio 4.1 drops it when the body has no
-  joint of its own, and puts it before a root joint): :mod:`clik.model.mjcf` places
-  the root body itself, at :attr:`MjcfDocument.root_probe`'s pose. With a fixed base
-  a removed free joint is warned (:class:`FreeJointWeldedWarning`); with a planar or
-  floating base the ``<keyframe>`` leaves the document too (Pinocchio would read a
-  key against the model with its root joint) and clik reads the ``home`` key
-  (:attr:`MjcfDocument.home_joints`). Pinocchio 4.1's own reading of a free joint is
-  not used: it places the joint at ``pos - R pos`` instead of the world's origin (its
-  forward kinematics then differ from MuJoCo's by that offset) and ignores a root joint
-  given with it.
+  pose (``pos``, ``quat``, ``euler``, ...): :mod:`clik.model.mjcf` places the root body
+  itself, at :attr:`MjcfDocument.root_probe`'s pose (the base is clik's choice:
+  ``base="fixed"``, ``"planar"`` or ``"floating"``). With a fixed base a removed free
+  joint is warned (:class:`FreeJointWeldedWarning`); with a planar or floating base the
+  ``<keyframe>`` leaves the document too and clik reads the ``home`` key
+  (:attr:`MjcfDocument.home_joints`).
 
 Each problem raises :class:`~clik.errors.RobotLoadError` naming the file (the included
 one, when it is there) and the line.
@@ -65,6 +60,7 @@ from clik.model.mjcf_geoms import check_geom_sizes
 from clik.model.mjcf_numbers import check_numbers, unit_axis_angles
 from clik.model.mjcf_root import SOURCE_ATTRIBUTE as _SOURCE
 from clik.model.mjcf_root import MjcfDocument, check_world
+from clik.model.mjcf_visual import drop_visual_meshes
 from clik.model.urdf_check import (
     MAX_ELEMENTS,
     parse_xml,
@@ -78,17 +74,19 @@ MAX_INCLUDE_DEPTH = 8
 """Most nested levels of ``<include>`` (a file including one that includes ...)."""
 
 MERGED_SECTIONS = ("default", "asset", "worldbody", "keyframe")
-"""Top-level sections Pinocchio reads once: their copies are merged into the first."""
+"""Top-level sections merged into their first copy (MuJoCo reads them all)."""
 
 REFUSED_ELEMENTS = {
-    "frame": "Pinocchio's MJCF reader skips <frame>: the bodies inside would be misplaced",
-    "replicate": "Pinocchio's MJCF reader skips <replicate>: the copies would be missing",
-    "attach": "Pinocchio's MJCF reader skips <attach>: the attached model would be missing",
-    "composite": "Pinocchio's MJCF reader does not read <composite> bodies",
-    "flexcomp": "Pinocchio's MJCF reader does not read <flexcomp> bodies",
-    "hfield": "height fields (<hfield>) are not read by Pinocchio's MJCF reader",
+    "attach": "clik loads one model file (and its includes): attach the model with <include>",
+    "composite": "clik loads rigid bodies: a <composite> makes soft or particle bodies",
+    "flexcomp": "clik loads rigid bodies: a <flexcomp> makes a deformable body",
+    "hfield": "height fields (<hfield>) are terrain, not part of a robot: give obstacles",
 }
-"""Elements refused, with why: Pinocchio would silently read a different robot."""
+"""Elements refused, with why: clik would load a different robot."""
+
+WORLD_REFUSED = ("frame", "replicate")
+"""Elements refused directly in ``<worldbody>`` (they would hide or repeat the root body);
+inside a body MuJoCo's compiler reads them."""
 
 CHECKED_FILES = ("include", "mesh", "texture")
 """Elements whose file attributes clik checks; a file attribute elsewhere is refused."""
@@ -96,7 +94,7 @@ CHECKED_FILES = ("include", "mesh", "texture")
 TEXTURE_FILES = ("file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback")
 """A ``<texture>``'s file attributes (one image, or a cube's six)."""
 
-_LEADING = ("compiler", "default", "asset")  # Pinocchio reads sections in document order
+_LEADING = ("compiler", "default", "asset")  # before the bodies, as MuJoCo reads them
 
 
 def is_mjcf(path: str | Path) -> bool:
@@ -115,7 +113,7 @@ def is_mjcf(path: str | Path) -> bool:
 
 
 def check_mjcf(path: str | Path, base: str = FIXED) -> MjcfDocument:
-    """Check an MJCF model and every file it reads; the document Pinocchio may read.
+    """Check an MJCF model and every file it reads; the document MuJoCo may compile.
 
     Args:
         path: The main model file (root element ``<mujoco>``).
@@ -141,34 +139,47 @@ def check_mjcf(path: str | Path, base: str = FIXED) -> MjcfDocument:
     _merge_sections(root)
     fail = _failing(path)
     if root.get("model") is None:
-        root.set("model", path.stem)  # MuJoCo's default; Pinocchio requires one
+        root.set("model", path.stem)  # MuJoCo's default
     compiler = root.find("compiler")
     compiler = compiler if compiler is not None else etree.SubElement(root, "compiler")
     degrees = compiler.get("angle", "degree") != "radian"
-    if compiler.get("autolimits") == "false":
-        raise fail(
-            '<compiler autolimits="false"> is refused: Pinocchio\'s MJCF reader then needs '
-            "limited=... on every joint and misreads joints without it",
-            compiler,
-        )
-    if any(letter.isupper() for letter in compiler.get("eulerseq", "")):
-        raise fail(
-            f"<compiler eulerseq={compiler.get('eulerseq')!r}> is refused: Pinocchio's MJCF "
-            "reader reads extrinsic (upper-case) axes as intrinsic ones",
-            compiler,
-        )
+    _check_world_elements(root, fail)
     unit_axis_angles(root)
     files = [path.resolve(), *expansion.included]
-    files += _locate_assets(root, compiler, folder, fail)
+    missing: list[tuple[etree._Element, str, str]] = []
+    files += _locate_assets(root, compiler, folder, fail, missing)
+    drop_visual_meshes(root, missing, fail)
     for attribute in ("meshdir", "texturedir", "assetdir", "strippath"):
         compiler.attrib.pop(attribute, None)
     document = MjcfDocument(path, "", files, degrees, base=base)
     check_world(root, path, fail, document)
     check_geom_sizes(root, fail)
+    document.text, document.lines = _serialised(root, path)
+    return document
+
+
+def _serialised(root: etree._Element, path: Path) -> tuple[str, dict[int, tuple[str, int]]]:
+    """The document, one element per line, and each line's element's file and line.
+
+    MuJoCo's compiler names the line of the document it refuses: :data:`MjcfDocument.lines
+    <clik.model.mjcf_root.MjcfDocument.lines>` turns it back into the user's file and line.
+    """
+    elements = [e for e in root.iter() if isinstance(e.tag, str)]
+    origins = [(_source_of(e) or str(path), e.sourceline) for e in elements]
     for element in root.iter():
         element.attrib.pop(_SOURCE, None)
-    document.text = etree.tostring(root, encoding="unicode")
-    return document
+        if element.text is not None and not element.text.strip():
+            element.text = None
+        if element.tail is not None and not element.tail.strip():
+            element.tail = None
+    text = etree.tostring(root, encoding="unicode", pretty_print=True)
+    written = [e for e in etree.fromstring(text).iter() if isinstance(e.tag, str)]
+    lines = {
+        int(e.sourceline): (source, int(line))
+        for e, (source, line) in zip(written, origins, strict=True)
+        if e.sourceline is not None and line is not None
+    }
+    return text, lines
 
 
 def _failing(path: Path) -> Fail:
@@ -296,10 +307,30 @@ def _merge_sections(root: etree._Element) -> None:
             root.insert(position, section)
 
 
+def _check_world_elements(root: etree._Element, fail: Fail) -> None:
+    """No ``<frame>`` or ``<replicate>`` directly in the world (around the root body)."""
+    for world in root.iter("worldbody"):
+        for element in world:
+            if element.tag in WORLD_REFUSED:
+                raise fail(
+                    f"<{element.tag}> directly in <worldbody> is refused: clik loads one robot "
+                    "from one root body; put the <frame> or <replicate> inside the root body",
+                    element,
+                )
+
+
 def _locate_assets(
-    root: etree._Element, compiler: etree._Element, folder: Path, fail: Fail
+    root: etree._Element,
+    compiler: etree._Element,
+    folder: Path,
+    fail: Fail,
+    missing: list[tuple[etree._Element, str, str]],
 ) -> list[Path]:
-    """Check every mesh and texture file; write its absolute path in the document."""
+    """Check every mesh and texture file; write its absolute path in the document.
+
+    A mesh file not found is appended to ``missing`` (element, file as written, problem)
+    instead of refused: :func:`~clik.model.mjcf_visual.drop_visual_meshes` decides.
+    """
     strip = compiler.get("strippath") == "true"
     asset_dir = compiler.get("assetdir", "")
     dirs = {
@@ -317,6 +348,9 @@ def _locate_assets(
                 file = folder / dirs[tag] / name  # an absolute name or dir stays absolute
                 what = f"{tag} file {shown_path(written)}"
                 located = _inside(file, folder, what)
+                if isinstance(located, str) and tag == "mesh" and "not found" in located:
+                    missing.append((element, written, located))
+                    break
                 if isinstance(located, str):
                     raise fail(located, element)
                 if tag == "mesh":

@@ -1,12 +1,12 @@
-"""An MJCF geom's shape as Pinocchio reads it: its type and sizes, through default classes.
+"""An MJCF geom's attributes through default classes; its sizes checked.
 
-Pinocchio's MJCF reader takes a geom's attributes from the top-level ``<default>``,
-then its body's ``childclass``, then its own ``class`` (each class holding its
-parents' attributes), then the geom itself; it reads as many size numbers as the
-shape needs (a sphere 1, a capsule or cylinder 2, a box or ellipsoid 3, one fewer
-with ``fromto``) and takes whatever memory holds for the ones missing. MuJoCo
-refuses such a geom ("size 1 must be positive"); :func:`check_geom_sizes` refuses it
-before Pinocchio reads it, and sizes that are not positive.
+A geom takes each attribute from itself, else from its class (its own ``class``, else
+the nearest enclosing body's ``childclass``, else the top-level ``<default>``), each
+class holding its parents' attributes, as MuJoCo reads them. A primitive shape needs
+as many size numbers as its shape (a sphere 1, a capsule or cylinder 2, a box or
+ellipsoid 3, one fewer with ``fromto``): :func:`check_geom_sizes` refuses a geom
+without them, or with sizes that are not positive, naming the geom and its line
+(MuJoCo's compiler would say "size 1 must be positive" without them).
 """
 
 from __future__ import annotations
@@ -36,13 +36,13 @@ def check_geom_sizes(root: etree._Element, fail: Fail) -> None:
     top = root.find("default")
     world = root.find("worldbody")
     for geom in [] if world is None else world.iter("geom"):
-        chain = _chain(geom, classes, top)
-        shape = _attribute(geom, "type", chain) or "sphere"
+        chain = geom_chain(geom, classes, top)
+        shape = geom_attribute(geom, "type", chain) or "sphere"
         if shape not in NEEDED_SIZES:
             continue  # a mesh (its file gives the shape), a plane (dropped)
-        fromto = _attribute(geom, "fromto", chain) is not None
+        fromto = geom_attribute(geom, "fromto", chain) is not None
         needed = WITH_FROMTO[shape] if fromto else NEEDED_SIZES[shape]
-        written = _attribute(geom, "size", chain) or ""
+        written = geom_attribute(geom, "size", chain) or ""
         try:
             sizes = [float(v) for v in written.split()]
         except ValueError:
@@ -58,28 +58,30 @@ def check_geom_sizes(root: etree._Element, fail: Fail) -> None:
             raise fail(f"{name} of type {shape!r} has size={written!r}: not positive", geom)
 
 
-def _chain(
+def geom_chain(
     geom: etree._Element, classes: dict[str | None, etree._Element], top: etree._Element | None
 ) -> list[etree._Element]:
-    """The ``<default>`` elements a geom's attributes come from, the first one winning."""
-    names = [geom.get("class")]
-    for body in geom.iterancestors("body"):
-        if body.get("childclass"):
-            names.append(body.get("childclass"))
-            break
+    """The ``<default>`` elements a geom's attributes come from, the first one winning.
+
+    Its own ``class``, else the nearest enclosing body's ``childclass``; then that
+    class's parents; the top-level ``<default>`` last.
+    """
+    name = geom.get("class")
+    if name is None:
+        bodies = (b.get("childclass") for b in geom.iterancestors("body"))
+        name = next((c for c in bodies if c), None)
     chain: list[etree._Element] = []
-    for name in names:
-        default = classes.get(name)
-        while default is not None and default.tag == "default":
-            chain.append(default)
-            default = default.getparent()
-    if top is not None:
+    default = classes.get(name)
+    while default is not None and default.tag == "default":
+        chain.append(default)
+        default = default.getparent()
+    if top is not None and top not in chain:
         chain.append(top)
     return chain
 
 
-def _attribute(geom: etree._Element, name: str, chain: list[etree._Element]) -> str | None:
-    """The value Pinocchio gives a geom attribute: its own, else its defaults'."""
+def geom_attribute(geom: etree._Element, name: str, chain: list[etree._Element]) -> str | None:
+    """The value MuJoCo gives a geom attribute: its own, else its defaults'."""
     if geom.get(name) is not None:
         return geom.get(name)
     for default in chain:

@@ -1,14 +1,14 @@
-"""An MJCF model's numbers, checked before Pinocchio reads them.
+"""An MJCF model's numbers, checked before MuJoCo's compiler reads them.
 
 Bodies, geoms, sites, joints, inertials, meshes and keys (in the world or in default
 classes): every number finite, in its physical range (:mod:`clik.model.urdf_numbers`'s
 ranges: positions and sizes within :data:`~clik.bounds.MAX_COORDINATE` [m], masses
 within :data:`~clik.model.urdf_numbers.MAX_MASS`), counted right; joint ranges
-``lower <= upper``; no joint ``ref`` (Pinocchio's joint zero would not be MuJoCo's); no
-zero axis, quaternion or ``zaxis``; mesh scales within
-:data:`~clik.bounds.SCALE_RANGE`; no ball joint and only the geom types Pinocchio
-reads. :func:`unit_axis_angles` writes each ``axisangle``'s axis as a unit vector,
-which Pinocchio 4.1 needs (it rotates by a non-unit axis as given, MuJoCo normalises).
+``lower <= upper``; no zero axis, quaternion (all four numbers: MuJoCo writes ``w``
+first, so ``quat="0 0 0 1"`` is a half turn about z) or ``zaxis``; mesh scales within
+:data:`~clik.bounds.SCALE_RANGE`; no ball joint (clik's joints have one degree of
+freedom) and only the geom types clik reads. :func:`unit_axis_angles` writes each
+``axisangle``'s axis as a unit vector (MuJoCo normalises it too).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from clik.model.mesh_check import MAX_MESH_ELEMENTS, MeshRefused, check_scale
 from clik.model.urdf_numbers import Fail, read_numbers, shown
 
 SUPPORTED_GEOMS = ("plane", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh")
-"""Geom types Pinocchio reads (a plane is dropped, see :mod:`clik.model.mjcf`)."""
+"""Geom types clik reads (a plane is dropped, see :mod:`clik.model.mjcf_geometry`)."""
 
 # attribute -> (count or None for "any", kind for read_numbers, nonnegative)
 _NUMBERS: dict[str, dict[str, tuple[int | None, str, bool]]] = {
@@ -69,12 +69,6 @@ def check_numbers(element: etree._Element, fail: Fail) -> None:
         values = read_numbers(element, attribute, n, what, fail, kind, nonnegative)
         if attribute == "range" and values[0] > values[1]:
             raise fail(f"{what} range={values} has lower > upper", element)
-        if attribute == "ref" and values[0] != 0.0:
-            raise fail(
-                f"{what} ref={values[0]:g} is refused: Pinocchio's joint zero would not be "
-                "MuJoCo's; move the reference into the body's pose",
-                element,
-            )
         if attribute == "vertex" and (n % 3 or n // 3 > MAX_MESH_ELEMENTS):
             raise fail(f"{what} vertex= has {n} numbers: not (x, y, z) triples within budget")
         if attribute == "axis" and not any(values):
@@ -83,7 +77,8 @@ def check_numbers(element: etree._Element, fail: Fail) -> None:
         for attribute, count in _ORIENTATIONS.items():
             if element.get(attribute) is not None:
                 values = read_numbers(element, attribute, count, what, fail, "limit")
-                if attribute in ("quat", "zaxis", "axisangle") and not any(values[:3]):
+                axis = values if attribute == "quat" else values[:3]  # quat: w x y z
+                if attribute in ("quat", "zaxis", "axisangle") and not any(axis):
                     raise fail(f"{what} {attribute}={values} is zero", element)
     if tag == "mesh" and element.get("scale") is not None:
         scale = read_numbers(element, "scale", 3, what, fail, "scale")
@@ -92,16 +87,22 @@ def check_numbers(element: etree._Element, fail: Fail) -> None:
         except MeshRefused as refused:
             raise fail(str(refused), element) from None
     if tag == "joint" and element.get("type") == "ball":
-        raise fail(f"{what} is a ball joint: clik's joints have one degree of freedom", element)
+        body = element.getparent()
+        owner = f" of body {shown(body.get('name', '(unnamed)'))}" if body.tag == "body" else ""
+        raise fail(
+            f"{what}{owner} is a ball joint: clik's joints have one degree of freedom "
+            "(hinge or slide); write it as three hinges about x, y and z",
+            element,
+        )
     if tag == "geom" and element.get("type", "sphere") not in SUPPORTED_GEOMS:
         raise fail(
-            f"{what} type={element.get('type')!r}: Pinocchio reads {', '.join(SUPPORTED_GEOMS)}",
+            f"{what} type={element.get('type')!r}: clik reads {', '.join(SUPPORTED_GEOMS)}",
             element,
         )
 
 
 def unit_axis_angles(root: etree._Element) -> None:
-    """Write each ``axisangle``'s axis as a unit vector (Pinocchio 4.1 uses it as given)."""
+    """Write each ``axisangle``'s axis as a unit vector (as MuJoCo reads it)."""
     for element in root.iter():
         written = element.get("axisangle") if isinstance(element.tag, str) else None
         if written is not None:

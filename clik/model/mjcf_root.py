@@ -2,9 +2,9 @@
 
 Part of :func:`clik.model.mjcf_check.check_mjcf`. The root body's free joint is removed
 (its 7 ``qpos`` values leave every key: :attr:`MjcfDocument.home_base` keeps the ``home``
-key's), and so is the root body's pose (``pos``, ``quat``, ``euler``, ...: Pinocchio 4.1
-drops it when the body has no joint of its own, and puts it before a root joint):
-:mod:`clik.model.mjcf` places the root body itself, at :attr:`MjcfDocument.root_probe`'s
+key's), and so is the root body's pose (``pos``, ``quat``, ``euler``, ...): the base is
+clik's choice (fixed, planar, floating) and :mod:`clik.model.mjcf` places the root body
+itself, at :attr:`MjcfDocument.root_probe`'s
 pose. With a fixed base a removed free joint is warned (:class:`FreeJointWeldedWarning`);
 with a planar or floating base the ``<keyframe>`` leaves the document too and clik reads
 the ``home`` key (:attr:`MjcfDocument.home_joints`).
@@ -49,7 +49,7 @@ class FreeJointWeldedWarning(ClikWarning):
 
 @dataclass
 class MjcfDocument:
-    """An MJCF model as clik hands it to Pinocchio: one checked, self-contained document.
+    """An MJCF model as clik hands it to MuJoCo's compiler: one checked, self-contained document.
 
     Attributes:
         path: The main model file.
@@ -64,7 +64,7 @@ class MjcfDocument:
             base's root joint), or None.
         base: The base the document was checked for (:data:`clik.model.base.BASES`).
         root_probe: A one-body document holding the root body's pose attributes (removed
-            from ``text``) and a hinge: Pinocchio places that hinge at the pose. None when
+            from ``text``) and a hinge: MuJoCo compiles that body's pose. None when
             the root body has no pose attributes (it is at the world's origin).
         home_base: The ``home`` key's 7 free-joint values as MuJoCo writes them
             (``x, y, z`` [m], quaternion ``w, x, y, z``), or None (no such key, or no
@@ -72,6 +72,10 @@ class MjcfDocument:
         home_joints: With a planar or floating base (the ``<keyframe>`` removed from
             ``text``): the ``home`` key's values of the joints (after the free joint's),
             or None when there is no ``home`` key with ``qpos``.
+        lines: For each line of ``text`` (one element per line), the file and line the
+            element came from: MuJoCo's compiler's messages name lines of ``text``.
+        qpos0: MuJoCo's ``qpos0`` of the compiled document (each joint's ``ref``; the
+            root body's free joint is not in it), set when the model is built.
     """
 
     path: Path
@@ -83,6 +87,8 @@ class MjcfDocument:
     root_probe: str | None = None
     home_base: list[float] | None = None
     home_joints: list[float] | None = None
+    lines: dict[int, tuple[str, int]] = field(default_factory=dict)
+    qpos0: list[float] | None = None
 
 
 def _in_world(element: etree._Element) -> bool:
@@ -99,8 +105,8 @@ def check_world(root: etree._Element, path: Path, fail: Fail, document: MjcfDocu
     if len(bodies) > 1:
         names = ", ".join(shown(b.get("name", "(unnamed)")) for b in bodies[:10])
         raise fail(
-            f"the <worldbody> holds {len(bodies)} bodies ({names}); Pinocchio's MJCF reader "
-            "reads only the first: keep one robot (one root body) per model",
+            f"the <worldbody> holds {len(bodies)} bodies ({names}): clik loads one robot, "
+            "one root body, per model (give the environment as obstacles)",
             bodies[1],
         )
     all_bodies = list(bodies[0].iter("body"))
@@ -143,7 +149,7 @@ def _read_keys(root: etree._Element, free: bool, fail: Fail, document: MjcfDocum
     """Drop a free joint's values from every key; keep the ``home`` key's in ``document``.
 
     With a planar or floating base the ``<keyframe>`` leaves the document: its keys
-    hold no values for the base's root joint, which Pinocchio would refuse.
+    hold no values for the base's root joint.
     """
     for key in root.iter("key"):
         written = key.get("qpos")
@@ -166,15 +172,15 @@ def _read_keys(root: etree._Element, free: bool, fail: Fail, document: MjcfDocum
         for keyframe in root.findall("keyframe"):
             root.remove(keyframe)
     else:
-        document.home_joints = None  # Pinocchio reads the keys of a fixed base
+        document.home_joints = None  # the compiled model's keys are read on a fixed base
 
 
 def _root_probe(root: etree._Element, body: etree._Element) -> str | None:
     """Move the root body's pose out of the document into a one-body probe document.
 
     The probe keeps the model's ``<compiler>`` (angle unit, Euler sequence) and puts a
-    hinge in a body with the root body's pose attributes: Pinocchio places that hinge
-    at the pose, as it places any body's joint. None when the body has no pose.
+    hinge in a body with the root body's pose attributes: MuJoCo's compiler places that
+    body as it places any body. None when the body has no pose.
     """
     pose = {a: str(body.get(a)) for a in POSE_ATTRIBUTES if body.get(a) is not None}
     if not pose:

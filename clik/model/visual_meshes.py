@@ -41,18 +41,26 @@ _LFS_POINTER_BYTES = 1024
 
 
 class MissingVisualMeshWarning(ClikWarning):
-    """A link's visual mesh is missing: the link is drawn with its collision geometry.
+    """A visual mesh is missing: it is left out of the visual model.
+
+    A URDF link is then drawn with its collision geometry; an MJCF body
+    (``part="body"``) without that geom.
 
     Attributes:
-        link: The link's name.
+        link: The link's (or the MJCF body's) name.
         filename: The mesh's ``filename`` as the URDF writes it.
         problem: What is wrong with it, in words (e.g. "not found (looked for ...)").
     """
 
-    def __init__(self, link: str, filename: str, problem: str) -> None:
+    def __init__(self, link: str, filename: str, problem: str, part: str = "link") -> None:
+        drawn = (
+            "the link is drawn with its collision geometry"
+            if part == "link"
+            else "the body is drawn without that geom"
+        )
         super().__init__(
-            f"link {shown(link)}: visual mesh {shown_path(filename)} {problem}; it is left "
-            "out of the visual model and the link is drawn with its collision geometry "
+            f"{part} {shown(link)}: visual mesh {shown_path(filename)} {problem}; it is left "
+            f"out of the visual model and {drawn} "
             "(visual meshes are optional: runs use collision geometry only)"
         )
         self.link = link

@@ -410,7 +410,7 @@ BAD = {
     "not mujoco root": ('<mujoco model="x"/>', None),
     "two root bodies": (
         model().replace("</worldbody>", '<body name="b9"><geom size="0.1"/></body></worldbody>'),
-        "the <worldbody> holds 2 bodies ('b1', 'b9'); Pinocchio's MJCF reader reads only the first",
+        "the <worldbody> holds 2 bodies ('b1', 'b9'): clik loads one robot, one root body",
     ),
     "no joint": (
         model().replace('<joint name="j1" axis="0 0 1" range="-1 1"/>', ""),
@@ -421,9 +421,11 @@ BAD = {
                        "pos='0 nan 0' is not finite"),
     "pos out of range": (model().replace('<body name="b1">', '<body name="b1" pos="0 1e9 0">'),
                          "is out of range"),
-    "joint ref": (model().replace('range="-1 1"', 'range="-1 1" ref="0.3"'), "ref=0.3 is refused"),
     "ball joint": (model().replace('axis="0 0 1"', 'type="ball"'), "is a ball joint"),
-    "frame": (model('<frame pos="1 0 0"><body name="b2"/></frame>'), "<frame> is refused"),
+    "frame in the world": (
+        model().replace("</worldbody>", '<frame pos="1 0 0"><body name="b2"/></frame></worldbody>'),
+        "<frame> directly in <worldbody> is refused",
+    ),
     "hfield": (model(head='<asset><hfield name="h" file="h.png"/></asset>'), "<hfield> is refused"),
     "skin file": (model(head='<deformable><skin file="s.skn"/></deformable>'),
                   "<skin> names a file, which clik does not read"),
@@ -432,8 +434,9 @@ BAD = {
     ),
     "box without size": (model('<geom type="box"/>'), "size='' (its own or its default class's)"),
     "zero radius": (model('<geom type="sphere" size="0"/>'), "not positive"),
-    "extrinsic euler sequence": (model(head='<compiler eulerseq="XYZ"/>'), "eulerseq='XYZ'"),
-    "autolimits false": (model(head='<compiler autolimits="false"/>'), 'autolimits="false"'),
+    "autolimits false": (  # MuJoCo's compiler's own message, at the joint's line
+        model(head='<compiler autolimits="false"/>'), "joint has `range` but not `limited`"
+    ),
     "obj format kept out": (model('<geom type="mesh" mesh="m"/>', head=_mesh("m.msh")), None),
 }  # fmt: skip
 

@@ -1,0 +1,225 @@
+"""Pinocchio's kinematic model from MuJoCo's compiled model (``mujoco.MjModel``).
+
+MuJoCo's compiler reads the checked document (:func:`clik.model.mjcf_check.check_mjcf`)
+exactly as MuJoCo does: default classes, w-first quaternions, ``eulerseq``, ``fromto``,
+mesh scales, joint ``ref``, the ``<compiler>`` settings. clik then builds its Pinocchio
+model from the compiled numbers, body by body (docs/robots/mjcf.md, "How clik reads
+MJCF"):
+
+- a body's frame in its parent's is ``(body_pos, body_quat)``;
+- each of its joints, in order, moves the body about (hinge) or along (slide) the
+  joint's unit axis ``a`` through its anchor ``p`` (both in the body's frame) by
+  ``q - q_ref`` (MuJoCo's ``qpos - qpos0``). In Pinocchio that is a one-degree-of-freedom
+  joint placed at ``T(p) R(a, -q_ref)`` (a slide: ``T(p - a q_ref)``) after the frame
+  reached so far, the body's frame ``T(-p)`` after it. A body with several joints
+  becomes a chain of one-degree-of-freedom joints (MuJoCo applies them in that order);
+  a body without joint is welded to its parent's joint;
+- clik's joint value is MuJoCo's ``qpos``: ranges, keys and the reference are read
+  as MuJoCo writes them;
+- a site is a frame (``OP_FRAME``) on its body's joint, a body a ``BODY`` frame, a
+  welded body also a ``FIXED_JOINT`` frame ``<body>_fixed`` (as Pinocchio's readers);
+- the inertia of each body is MuJoCo's (mass, centre of mass, principal inertia).
+
+Joint velocity limits: MJCF has none (runs use ``joint_speed``); effort limits are the
+joints' ``actuatorfrcrange`` when limited.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from clik.errors import RobotLoadError
+from clik.model.base import BASE_JOINT, root_joint
+from clik.model.mjcf_root import MjcfDocument
+
+FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3
+"""MuJoCo's joint types (``mjtJoint``)."""
+
+_AXES: dict[tuple[float, ...], str] = {(1.0, 0.0, 0.0): "X", (0.0, 1.0, 0.0): "Y", (0.0, 0.0, 1.0): "Z"}
+
+
+def compile_text(text: str, path: Any, lines: dict[int, tuple[str, int]] | None = None) -> Any:
+    """MuJoCo's compiled model (``mujoco.MjModel``) of a checked document.
+
+    The document's mesh files are absolute paths (checked); MuJoCo reads nothing else.
+
+    Args:
+        text: The document.
+        path: The model's file (named in errors).
+        lines: The file and line of each line of ``text``
+            (:attr:`~clik.model.mjcf_root.MjcfDocument.lines`).
+
+    Raises:
+        RobotLoadError: MuJoCo's compiler refuses it: its message, with the file and line
+            of the element it names.
+    """
+    import mujoco  # a dependency; imported when an MJCF model is loaded
+
+    try:
+        return mujoco.MjModel.from_xml_string(text)
+    except (ValueError, RuntimeError) as error:
+        message = " ".join(str(error).split())
+        found = re.search(r"line (\d+)", message)
+        source, line = (
+            (lines or {}).get(int(found.group(1)), (path, None)) if found else (path, None)
+        )
+        if found and line is not None:
+            message = message[: found.start()].rstrip(", ")
+        problem = f"MuJoCo's compiler refuses the model: {message.removeprefix('Error: ')}"
+        raise RobotLoadError(source, problem, line=line) from None
+
+
+def body_name(mj: Any, body: int) -> str:
+    """A body's name, ``body<i>`` when it has none."""
+    return str(mj.body(body).name) or f"body{body}"
+
+
+def joint_name(mj: Any, joint: int) -> str:
+    """A joint's name, ``<body>_joint<k>`` (its rank in its body) when it has none."""
+    name = str(mj.joint(joint).name)
+    if name:
+        return name
+    body = int(mj.jnt_bodyid[joint])
+    return f"{body_name(mj, body)}_joint{joint - int(mj.body_jntadr[body])}"
+
+
+def se3(position: np.ndarray, quaternion_wxyz: np.ndarray) -> pin.SE3:
+    """A pose from MuJoCo's position and w-first quaternion."""
+    w, x, y, z = (float(v) for v in quaternion_wxyz)
+    rotation = pin.Quaternion(w, x, y, z).normalized().matrix()
+    return pin.SE3(rotation, np.array(position, dtype=float))
+
+
+def build_model(mj: Any, document: MjcfDocument) -> pin.Model:
+    """Pinocchio's model of a compiled MJCF robot (see the module's docstring).
+
+    The base's root joint (``root_joint``: a planar or free-flyer joint) comes first
+    when ``document.base`` is not fixed; the root body hangs on it.
+
+    Raises:
+        RobotLoadError: A ball or free joint below the root (naming the body and joint).
+    """
+    model = pin.Model()
+    model.name = str(document.path.stem)
+    root = root_joint(document.base)
+    # per body: (Pinocchio joint it hangs on, its BODY frame, its placement in that joint)
+    hang: dict[int, tuple[int, int, pin.SE3]] = {0: (0, 0, pin.SE3.Identity())}
+    for body in range(1, mj.nbody):
+        parent_joint, parent_frame, parent_pose = hang[int(mj.body_parentid[body])]
+        if root is not None and int(mj.body_parentid[body]) == 0:
+            parent_joint = model.addJoint(0, root, pin.SE3.Identity(), BASE_JOINT)
+            parent_frame = model.addJointFrame(parent_joint, 0)
+            parent_pose = pin.SE3.Identity()
+        pose = parent_pose * se3(mj.body_pos[body], mj.body_quat[body])
+        hang[body] = _add_body(model, mj, document, body, (parent_joint, parent_frame, pose))
+    _add_sites(model, mj, hang)
+    _add_keys(model, mj, document)
+    return model
+
+
+def _add_body(
+    model: pin.Model, mj: Any, document: MjcfDocument, body: int, at: tuple[int, int, pin.SE3]
+) -> tuple[int, int, pin.SE3]:
+    """One body's joints (a chain), frames and inertia; where its children hang."""
+    joint, frame, pose = at
+    name = body_name(mj, body)
+    first = int(mj.body_jntadr[body])
+    for j in range(first, first + int(mj.body_jntnum[body])):
+        joint, frame, pose = _add_joint(model, mj, document, j, (joint, frame, pose))
+    if int(mj.body_jntnum[body]) == 0 and int(mj.body_parentid[body]) != 0:
+        frame = model.addFrame(pin.Frame(f"{name}_fixed", joint, frame, pose, pin.FIXED_JOINT))
+    frame = model.addFrame(pin.Frame(name, joint, frame, pose, pin.BODY))
+    inertia = _inertia(mj, body)
+    if inertia.mass > 0.0:
+        model.appendBodyToJoint(joint, inertia, pose)
+    return joint, frame, pose
+
+
+def _add_joint(
+    model: pin.Model, mj: Any, document: MjcfDocument, j: int, at: tuple[int, int, pin.SE3]
+) -> tuple[int, int, pin.SE3]:
+    """One hinge or slide joint after ``at``; the body's frame after it."""
+    parent, frame, pose = at
+    kind = int(mj.jnt_type[j])
+    name = joint_name(mj, j)
+    body = body_name(mj, int(mj.jnt_bodyid[j]))
+    if kind not in (HINGE, SLIDE):
+        what = "a ball joint" if kind == BALL else "a free joint below the root body"
+        raise RobotLoadError(
+            document.path,
+            f"body {body!r} has {what} ({name!r}): clik's joints have one degree of freedom "
+            "(hinge or slide); a ball joint can be written as three hinges",
+        )
+    axis = np.array(mj.jnt_axis[j], dtype=float)
+    anchor = np.array(mj.jnt_pos[j], dtype=float)
+    ref = float(mj.qpos0[mj.jnt_qposadr[j]])
+    if kind == HINGE:
+        offset = pin.SE3(pin.AngleAxis(-ref, axis).matrix(), anchor)
+    else:
+        offset = pin.SE3(np.eye(3), anchor - ref * axis)
+    lower, upper = (
+        (float(mj.jnt_range[j][0]), float(mj.jnt_range[j][1]))
+        if mj.jnt_limited[j]
+        else (-np.inf, np.inf)
+    )
+    effort = float(np.max(np.abs(mj.jnt_actfrcrange[j]))) if mj.jnt_actfrclimited[j] else np.inf
+    joint = model.addJoint(
+        parent,
+        _joint_model(kind, axis),
+        pose * offset,
+        name,
+        np.array([effort]),
+        np.array([np.inf]),
+        np.array([lower]),
+        np.array([upper]),
+    )
+    frame = model.addJointFrame(joint, frame)
+    return joint, frame, pin.SE3(np.eye(3), -anchor)
+
+
+def _joint_model(kind: int, axis: np.ndarray) -> pin.JointModel:
+    """Pinocchio's joint about (or along) a unit axis: an aligned type when it is one."""
+    letter = _AXES.get(tuple(float(v) for v in axis))
+    revolute = kind == HINGE
+    if letter is not None:
+        return getattr(pin, f"JointModel{'R' if revolute else 'P'}{letter}")()
+    if revolute:
+        return pin.JointModelRevoluteUnaligned(axis)
+    return pin.JointModelPrismaticUnaligned(axis)
+
+
+def _inertia(mj: Any, body: int) -> pin.Inertia:
+    """A body's spatial inertia in its frame (MuJoCo's principal axes at ``body_iquat``)."""
+    frame = se3(mj.body_ipos[body], mj.body_iquat[body])
+    principal = np.diag(np.array(mj.body_inertia[body], dtype=float))
+    rotational = frame.rotation @ principal @ frame.rotation.T
+    return pin.Inertia(float(mj.body_mass[body]), frame.translation, rotational)
+
+
+def _add_sites(model: pin.Model, mj: Any, hang: dict[int, tuple[int, int, pin.SE3]]) -> None:
+    """Each site, a frame on its body's joint (``site<i>`` when it has no name)."""
+    for site in range(mj.nsite):
+        joint, frame, pose = hang[int(mj.site_bodyid[site])]
+        if int(mj.site_bodyid[site]) == 0:
+            continue  # a site of the world: not part of the robot
+        name = str(mj.site(site).name) or f"site{site}"
+        placement = pose * se3(mj.site_pos[site], mj.site_quat[site])
+        model.addFrame(pin.Frame(name, joint, frame, placement, pin.OP_FRAME))
+
+
+def _add_keys(model: pin.Model, mj: Any, document: MjcfDocument) -> None:
+    """The keys (``<keyframe>``) as reference configurations, on a fixed base only.
+
+    A planar or floating base reads its ``home`` key from the document
+    (:attr:`~clik.model.mjcf_root.MjcfDocument.home_joints`).
+    """
+    if model.nq != mj.nq:
+        return
+    for key in range(mj.nkey):
+        name = str(mj.key(key).name)
+        if name:
+            model.referenceConfigurations[name] = np.array(mj.key_qpos[key], dtype=float)

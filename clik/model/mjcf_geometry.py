@@ -1,0 +1,126 @@
+"""Collision and visual geometry of an MJCF robot, from MuJoCo's compiled model.
+
+Each geom of a body becomes a Pinocchio geometry object on the body's frame
+(:mod:`clik.model.mjcf_compiled`) at MuJoCo's compiled pose (``geom_pos``,
+``geom_quat``: default classes, ``fromto`` and orientations already applied), with
+MuJoCo's sizes (``geom_size``). A mesh is MuJoCo's compiled mesh (``mesh_vert``,
+``mesh_face``: the file scaled, moved to its centre and principal axes, the geom's pose
+holding that offset). So every shape sits where MuJoCo puts it.
+
+- **Collision** geoms: those that can touch (not both ``contype="0"`` and
+  ``conaffinity="0"``). **Visual** geoms: those of ``group`` 0 to 2 (MuJoCo's viewer
+  shows those by default), so a group 3 geom is collision only.
+- Names: the geom's, else ``<body>Geom_<k>`` (its rank among its body's geoms, as
+  Pinocchio's reader names them).
+- Planes (a floor) are dropped: the environment is given as obstacles. Geoms of the
+  world body are not part of the robot and are dropped too.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from clik.model.mjcf_compiled import body_name, se3
+
+PLANE, SPHERE, CAPSULE, ELLIPSOID, CYLINDER, BOX, MESH = 0, 2, 3, 4, 5, 6, 7
+"""MuJoCo's geom types (``mjtGeom``) clik reads (height fields are refused before)."""
+
+VISUAL_GROUPS = 3
+"""Geoms of a ``group`` below this are drawn (MuJoCo's viewer default)."""
+
+
+def is_collision(mj: Any, geom: int) -> bool:
+    """A geom that can touch something: ``contype`` or ``conaffinity`` not zero."""
+    return bool(mj.geom_contype[geom] or mj.geom_conaffinity[geom])
+
+
+def build_geometry(mj: Any, model: pin.Model, kind: pin.GeometryType) -> pin.GeometryModel:
+    """The collision or visual geometry of the robot, on ``model``'s body frames.
+
+    Args:
+        mj: The compiled model.
+        model: The Pinocchio model built from it (its body frames are placed there).
+        kind: ``pin.COLLISION`` or ``pin.VISUAL``.
+    """
+    geometry = pin.GeometryModel()
+    meshes: dict[int, coal.CollisionGeometry] = {}
+    for geom in range(mj.ngeom):
+        body = int(mj.geom_bodyid[geom])
+        wanted = is_collision(mj, geom) if kind == pin.COLLISION else _is_visual(mj, geom)
+        if body == 0 or int(mj.geom_type[geom]) == PLANE or not wanted:
+            continue
+        frame_id = model.getFrameId(body_name(mj, body), pin.BODY)
+        frame = model.frames[frame_id]
+        placement = frame.placement * se3(mj.geom_pos[geom], mj.geom_quat[geom])
+        shape, path = _shape(mj, geom, meshes)
+        go = pin.GeometryObject(_geom_name(mj, geom), frame.parentJoint, frame_id, placement, shape)
+        go.meshPath = path
+        geometry.addGeometryObject(go)
+    return geometry
+
+
+def _is_visual(mj: Any, geom: int) -> bool:
+    return int(mj.geom_group[geom]) < VISUAL_GROUPS
+
+
+def _geom_name(mj: Any, geom: int) -> str:
+    name = str(mj.geom(geom).name)
+    if name:
+        return name
+    body = int(mj.geom_bodyid[geom])
+    return f"{body_name(mj, body)}Geom_{geom - int(mj.body_geomadr[body])}"
+
+
+def _shape(
+    mj: Any, geom: int, meshes: dict[int, coal.CollisionGeometry]
+) -> tuple[coal.CollisionGeometry, str]:
+    """The coal shape of a geom (sizes [m] as MuJoCo compiled them) and its mesh file."""
+    kind = int(mj.geom_type[geom])
+    size = np.array(mj.geom_size[geom], dtype=float)
+    if kind == SPHERE:
+        return coal.Sphere(size[0]), ""
+    if kind == CAPSULE:
+        return coal.Capsule(size[0], 2.0 * size[1]), ""
+    if kind == CYLINDER:
+        return coal.Cylinder(size[0], 2.0 * size[1]), ""
+    if kind == BOX:
+        return coal.Box(*(2.0 * size)), ""
+    if kind == ELLIPSOID:
+        return coal.Ellipsoid(*size), ""
+    mesh = int(mj.geom_dataid[geom])
+    if mesh not in meshes:
+        meshes[mesh] = _mesh(mj, mesh)
+    return meshes[mesh], _mesh_path(mj, mesh)
+
+
+def _mesh(mj: Any, mesh: int) -> coal.BVHModelOBBRSS:
+    """MuJoCo's compiled mesh (scaled, in its centred frame) as a coal triangle mesh."""
+    start, count = int(mj.mesh_vertadr[mesh]), int(mj.mesh_vertnum[mesh])
+    first, faces = int(mj.mesh_faceadr[mesh]), int(mj.mesh_facenum[mesh])
+    vertices = np.array(mj.mesh_vert[start : start + count], dtype=float)
+    triangles = np.array(mj.mesh_face[first : first + faces], dtype=np.int64)
+    bvh = coal.BVHModelOBBRSS()
+    bvh.beginModel(faces, count)
+    bvh.addVertices(vertices)
+    bvh.addTriangles(triangles)
+    bvh.endModel()
+    return bvh
+
+
+def _mesh_path(mj: Any, mesh: int) -> str:
+    """The mesh's file; with ``#<asset name>`` when several mesh assets read that file.
+
+    Viewers cache a shape by this path: one file scaled two ways is two shapes.
+    """
+    files = [_mesh_file(mj, m) for m in range(mj.nmesh)]
+    file = files[mesh]
+    return f"{file}#{mj.mesh(mesh).name}" if files.count(file) > 1 or not file else file
+
+
+def _mesh_file(mj: Any, mesh: int) -> str:
+    address = int(mj.mesh_pathadr[mesh])
+    return "" if address < 0 else mj.paths[address:].split(b"\0", 1)[0].decode()
