@@ -47,6 +47,7 @@ from clik.model.mimic import MimicJointWarning
 from clik.model.mjcf_root import FreeJointWeldedWarning
 from clik.model.robot import Robot
 from clik.model.srdf import SrdfWarning
+from clik.model.srdf_names import SrdfMismatchWarning
 from clik.model.visual_meshes import MissingVisualMeshWarning
 from clik.model.xacro_expand import XacroWarning
 from clik.objectives.objective import Objective
@@ -98,6 +99,7 @@ __all__ = [
     "SolveResult",
     "SpeedLimitWarning",
     "SpeedLimits",
+    "SrdfMismatchWarning",
     "SrdfWarning",
     "StabilityWarning",
     "StartWarning",

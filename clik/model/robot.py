@@ -170,9 +170,12 @@ class Robot:
                 ``{"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}``;
                 the models are reduced to the other joints.
             xacro_args: Arguments of a xacro file, name -> value (strings), e.g.
-                ``{"n_links": "5"}``; only for a xacro ``source``.
+                ``{"n_links": "5"}``; only for a xacro ``source`` or SRDF (which
+                need not use them all when the source is xacro too).
             srdf: An SRDF file (:mod:`clik.model.srdf`: disabled collision pairs, group
                 states); default the robot's own (example-robot-data's), False: none.
+                One with xacro markup is expanded like a xacro source, with
+                ``xacro_args`` (:mod:`clik.model.srdf_xacro`).
             base: ``"fixed"`` (welded to the world), ``"planar"`` (a mobile base:
                 x, y, yaw) or ``"floating"`` (a free-flyer: position and
                 orientation); a planar or floating base is the model's first joint,
@@ -191,19 +194,21 @@ class Robot:
             RobotLoadError: The file is missing or invalid (including a ``<mimic>``
                 with a non-numeric multiplier or offset, or mimic joints that
                 follow each other in a cycle), or xacro cannot expand it (see
-                :func:`~clik.model.xacro_expand.expand_xacro`), or the SRDF is invalid.
+                :func:`~clik.model.xacro_expand.expand_xacro`), or the SRDF is invalid
+                or xacro cannot expand it (names the SRDF file).
             JointNotFound: A joint in ``lock`` does not exist.
             InputError: A lock value is not finite or outside the joint's limits; an
                 unknown ``base``, a bad ``base_speed`` or one for a fixed base; the base
                 joint in ``lock``;
-                ``xacro_args`` for a source that is not a xacro file, or not
-                strings, or missing an argument the file needs; a ``$(find pkg)``
+                ``xacro_args`` for a source and an SRDF that are not xacro files, or
+                not strings, or missing an argument a file needs; a ``$(find pkg)``
                 with no package ``pkg`` in ``package_dirs``; two packages of one name
                 under one package folder (:mod:`clik.model.packages`).
 
         Warns:
             MimicJointWarning: Mimic followers were locked while their leader is free.
-            SrdfWarning: The SRDF names links the robot does not have.
+            SrdfWarning: Some SRDF pairs name links the robot does not have (counted).
+            SrdfMismatchWarning: The SRDF names none of the robot's links and joints.
         """
         return read_robot(cls, source, package_dirs, lock, xacro_args, base, base_speed, srdf)
 

@@ -6,7 +6,8 @@ packages found by :class:`~clik.model.packages.PackageDirs`), the strict checks
 warning), the URDF text Pinocchio reads (:func:`clik.model.urdf_uris.pinocchio_urdf`:
 every mesh the file checked), Pinocchio's models with the base's root joint
 (:mod:`clik.model.loading`, :mod:`clik.model.base`), the reference configuration,
-then the SRDF (:mod:`clik.model.srdf`) and the locked joints. An MJCF model has its own
+then the SRDF (:mod:`clik.model.srdf`; a xacro SRDF expanded like the URDF, with the same
+``xacro_args`` and packages) and the locked joints. An MJCF model has its own
 path (:func:`clik.model.mjcf.load_mjcf`).
 
 Mimic joints (URDF ``<mimic>``, e.g. the Panda's ``panda_finger_joint2``) are always
@@ -64,8 +65,9 @@ def read_robot(
         raise InputError("package_dirs", expected, str(package_dirs))
     dirs = [str(d) for d in (files.package_dirs if package_dirs is None else package_dirs)]
     args = check_xacro_args(xacro_args)
-    if args and not is_xacro(urdf):
-        raise InputError("xacro_args", "a xacro source (a file ending in .xacro)", str(source))
+    if args and not is_xacro(urdf) and not (srdf_path and is_xacro(srdf_path)):
+        expected = "a xacro source or SRDF (a file ending in .xacro)"
+        raise InputError("xacro_args", expected, str(source))
     packages = PackageDirs(dirs)  # workspaces searched once for this load
     text = expand_xacro(urdf, args, packages) if is_xacro(urdf) else None
 
@@ -82,7 +84,7 @@ def read_robot(
     robot.mimics = mimics
     robot.xacro_args, robot.urdf_text, robot._model_text = args, text, model_text
     robot.visual_links, robot.missing_visuals = visual_links(root), missing_visuals(root)
-    _set_srdf(robot, srdf_path)
+    _set_srdf(robot, srdf_path, packages, extra_args=is_xacro(urdf))
     names = robot.joint_names
     followers = [f for f, m in mimics.items() if f in names and m.leader in names]
     return locked_robot(robot, dict(lock or {}), mimics) if lock or followers else robot
@@ -106,10 +108,21 @@ def _read_mjcf(
     return locked_robot(robot, dict(lock)) if lock else robot
 
 
-def _set_srdf(robot: Robot, path: Path | None) -> None:
-    """Read the SRDF file ``path`` (None: none) and keep what the robot uses of it."""
+def _set_srdf(robot: Robot, path: Path | None, packages: PackageDirs, extra_args: bool) -> None:
+    """Read the SRDF file ``path`` (None: none) and keep what the robot uses of it.
+
+    A xacro SRDF is expanded with the robot's ``xacro_args`` and ``packages``; with
+    ``extra_args`` (the URDF is xacro too, and took them) it need not use them all.
+    """
     if path is not None:
-        srdf = srdf_files.read_srdf(path, robot.link_names)
+        srdf = srdf_files.read_srdf(
+            path,
+            robot.link_names,
+            robot.joint_names,
+            robot.xacro_args,
+            packages,
+            extra_args=extra_args,
+        )
         robot.srdf_path, robot.group_states = srdf.path.resolve(), srdf.group_states
         robot.disabled_collision_pairs = srdf.disabled_pairs
 

@@ -8,9 +8,13 @@ Every example-robot-data robot ships one.
 
 :func:`read_srdf` reads one strictly, with the URDF's rules
 (:func:`clik.model.urdf_check.parse_xml`: no entities, no external DTD, no XInclude,
-the same size and element budgets), and checks its names and numbers. Links the robot
-does not have are left out with a :class:`SrdfWarning` naming them (a MoveIt setup
-assistant's file often keeps names of links renamed since). A group state's joints are
+the same size and element budgets), and checks its names and numbers. An SRDF with
+xacro markup (``arm.srdf.xacro``) is expanded first, with the URDF's ``xacro_args`` and
+packages (:mod:`clik.model.srdf_xacro`). Links the robot does not have are left out
+with a :class:`SrdfWarning` counting the pairs and naming the links (a MoveIt setup
+assistant's file often keeps names of links renamed since); an SRDF naming no link and
+no joint of the robot, written for another robot or expanded with other arguments, is a
+:class:`~clik.model.srdf_names.SrdfMismatchWarning` instead. A group state's joints are
 checked when the state is used (:func:`group_state_configuration`): joints the model does
 not have are then skipped with a warning.
 
@@ -25,7 +29,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Collection, Mapping
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -38,7 +42,9 @@ from lxml import etree
 from clik.errors import ClikWarning, InputError, RobotLoadError, shown, user_stacklevel
 from clik.model.base import planar_from_free_flyer
 from clik.model.joints import CONTINUOUS, PLANAR, joint_kind
-from clik.model.urdf_check import MAX_NAME_LENGTH, parse_xml
+from clik.model.srdf_names import warn_mismatch
+from clik.model.srdf_xacro import expansion_lines, srdf_root
+from clik.model.urdf_check import MAX_NAME_LENGTH
 
 SRDF_PREFIX = "srdf:"
 """A start written ``"srdf:NAME"`` is the SRDF group state ``NAME``."""
@@ -103,72 +109,108 @@ class Srdf:
     unknown_links: tuple[str, ...] = ()
 
 
-def read_srdf(path: str | Path, link_names: Collection[str]) -> Srdf:
+def read_srdf(
+    path: str | Path,
+    link_names: Collection[str],
+    joint_names: Collection[str] = (),
+    xacro_args: Mapping[str, str] | None = None,
+    package_dirs: Sequence[str | Path] = (),
+    *,
+    extra_args: bool = False,
+) -> Srdf:
     """Read an SRDF file's disabled collision pairs and group states.
+
+    An SRDF with xacro markup (``arm.srdf.xacro``, ``${prefix}`` names, macros) is
+    expanded first, with ``xacro_args`` and ``package_dirs``
+    (:func:`clik.model.srdf_xacro.srdf_root`).
 
     Args:
         path: The SRDF file.
         link_names: The robot's link names (its URDF's ``<link>`` elements).
+        joint_names: The robot's joint names (its movable joints).
+        xacro_args: Arguments of the SRDF's xacro markup (the URDF's).
+        package_dirs: Folders holding the packages its ``$(find pkg)`` name.
+        extra_args: Whether ``xacro_args`` may hold arguments the SRDF does not use.
 
     Returns:
         The file's pairs (among ``link_names``) and group states.
 
     Raises:
         RobotLoadError: The file is missing, not strict XML within the budgets (see
-            :func:`~clik.model.urdf_check.parse_xml`), its root is not ``<robot>``, a
-            ``<disable_collisions>`` lacks ``link1`` or ``link2``, a ``<group_state>``
-            lacks its ``name``, a joint value is not one to
-            :data:`MAX_JOINT_VALUES` finite numbers of magnitude at most
+            :func:`~clik.model.urdf_check.parse_xml`), xacro cannot expand it, its
+            root is not ``<robot>``, a ``<disable_collisions>`` lacks ``link1`` or
+            ``link2``, a ``<group_state>`` lacks its ``name``, a joint value is not
+            one to :data:`MAX_JOINT_VALUES` finite numbers of magnitude at most
             :data:`MAX_GROUP_STATE_VALUE`, a name is longer than
             :data:`~clik.model.urdf_check.MAX_NAME_LENGTH`, or two states of one name
-            give one joint different values. Each names the line.
+            give one joint different values. Each names the file and the line (of
+            the expansion, for a xacro SRDF).
+        InputError: ``xacro_args`` or ``package_dirs`` do not fit its xacro markup.
 
     Warns:
-        SrdfWarning: Some ``<disable_collisions>`` name links the robot does not have.
+        SrdfMismatchWarning: The SRDF names no link and no joint of the robot (then
+            the warning below is not given).
+        SrdfWarning: Some ``<disable_collisions>`` name links the robot does not
+            have (one line: how many pairs, which links).
     """
     path = Path(path)
-    root = parse_xml(path).getroot()
-    if root.tag != "robot":
-        raise RobotLoadError(
-            path, f"expected an SRDF, whose root element is <robot>, got <{shown(root.tag)}>"
-        )
+    root, expanded = srdf_root(path, xacro_args, package_dirs, extra_args)
+    with expansion_lines(path, expanded):
+        return srdf_of(path, root, link_names, joint_names)
+
+
+def srdf_of(
+    path: Path, root: etree._Element, link_names: Collection[str], joint_names: Collection[str]
+) -> Srdf:
+    """What :func:`read_srdf` reads of the SRDF ``<robot>`` element ``root`` (as it is)."""
     links = set(link_names)
     pairs: set[tuple[str, str]] = set()
     unknown: dict[str, None] = {}
-    for element in root.iterchildren("disable_collisions"):
+    elements = list(root.iterchildren("disable_collisions"))
+    left_out = 0
+    for element in elements:
         first, second = (_name(path, element, key) for key in ("link1", "link2"))
         missing = [n for n in (first, second) if n not in links]
         unknown.update(dict.fromkeys(missing))
+        left_out += bool(missing)
         if not missing and first != second:
             pairs.add((first, second) if first < second else (second, first))
-    if unknown:
-        names = list(unknown)
-        listed = ", ".join(repr(n) for n in names[:_LISTED])
-        more = f" and {len(names) - _LISTED} more" if len(names) > _LISTED else ""
-        warnings.warn(
-            SrdfWarning(
-                f"{path}: <disable_collisions> names links the robot does not have "
-                f"({listed}{more}); their pairs are left out",
-                names,
-            ),
-            stacklevel=user_stacklevel(),
-        )
-    return Srdf(path, frozenset(pairs), _group_states(path, root), tuple(unknown))
+    states = _group_states(path, root)
+    if not warn_mismatch(path, root, link_names, joint_names) and unknown:
+        _warn_unknown_links(path, list(unknown), left_out, len(elements))
+    return Srdf(path, frozenset(pairs), states, tuple(unknown))
 
 
-def read_group_states(path: str | Path) -> Mapping[str, GroupState]:
+def _warn_unknown_links(path: Path, names: list[str], left_out: int, total: int) -> None:
+    """One :class:`SrdfWarning`: how many pairs name unknown links, and which links."""
+    listed = ", ".join(repr(n) for n in names[:_LISTED])
+    more = f" and {len(names) - _LISTED} more" if len(names) > _LISTED else ""
+    warnings.warn(
+        SrdfWarning(
+            f"{path}: {left_out} of its {total} <disable_collisions> pairs name links the "
+            f"robot does not have ({len(names)}: {listed}{more}); those pairs are left out",
+            names,
+        ),
+        stacklevel=user_stacklevel(),
+    )
+
+
+def read_group_states(
+    path: str | Path,
+    xacro_args: Mapping[str, str] | None = None,
+    package_dirs: Sequence[str | Path] = (),
+) -> Mapping[str, GroupState]:
     """The group states of the SRDF file ``path`` (its pairs not read: no robot needed).
+
+    A xacro SRDF is expanded first, as by :func:`read_srdf`.
 
     Raises:
         RobotLoadError: As :func:`read_srdf`.
     """
     path = Path(path)
-    root = parse_xml(path).getroot()
-    if root.tag != "robot":
-        raise RobotLoadError(
-            path, f"expected an SRDF, whose root element is <robot>, got <{shown(root.tag)}>"
-        )
-    return _group_states(path, root)
+    root, expanded = srdf_root(path, xacro_args, package_dirs)
+    with expansion_lines(path, expanded):
+        return _group_states(path, root)
 
 
 def _group_states(path: Path, root: etree._Element) -> Mapping[str, GroupState]:

@@ -2,7 +2,9 @@
 
 :func:`expand_xacro` runs the ``xacro`` package (PyPI) on a ``.xacro`` file and
 returns the URDF text, which :meth:`clik.Robot.load` then checks like any URDF
-(:func:`clik.model.urdf_check.check_urdf`). Without ROS, xacro cannot resolve
+(:func:`clik.model.urdf_check.check_urdf`); an SRDF with xacro markup is expanded
+by the same function, with the same arguments and packages
+(:mod:`clik.model.srdf_xacro`). Without ROS, xacro cannot resolve
 ``$(find pkg)``; here the package ``pkg`` is found as for ``package://pkg/...``
 meshes, by the name in its ``package.xml`` under the ``package_dirs`` (or a folder
 ``pkg`` directly in one of them; see :mod:`clik.model.packages`).
@@ -24,7 +26,8 @@ Everything is put back when the call returns or raises, and xacro's messages
 on stderr become :class:`XacroWarning` warnings.
 
 Errors: a ``$(arg name)`` that is neither given nor declared with a default,
-or a given argument the file never declares nor uses, is an
+or a given argument the file never declares nor uses (an SRDF expanded with
+its URDF's arguments may leave some unused), is an
 :class:`~clik.errors.InputError` on ``xacro_args``; an unknown package (or two of
 one name under a package folder) an :class:`~clik.errors.InputError` on
 ``package_dirs``; a file outside the roots
@@ -93,22 +96,27 @@ def expand_xacro(
     path: str | Path,
     xacro_args: Mapping[str, str] | None = None,
     package_dirs: Sequence[str | Path] = (),
+    *,
+    extra_args: bool = False,
 ) -> str:
-    """Expand a xacro file into URDF text.
+    """Expand a xacro file into URDF text (or SRDF text: :mod:`clik.model.srdf_xacro`).
 
     Args:
         path: The ``.xacro`` file.
         xacro_args: Values of its ``<xacro:arg>`` / ``$(arg ...)`` arguments.
         package_dirs: Folders holding the packages named by ``$(find pkg)``
             (a :class:`~clik.model.packages.PackageDirs` keeps its searches).
+        extra_args: Whether ``xacro_args`` may hold arguments the file neither
+            declares nor uses (an SRDF expanded with its URDF's arguments, which
+            the URDF's expansion checked).
 
     Returns:
-        The expanded XML (a URDF, not yet checked).
+        The expanded XML (a URDF or an SRDF, not yet checked).
 
     Raises:
-        InputError: A bad ``xacro_args`` (not strings; an argument missing or
-            unknown); a ``$(find pkg)`` with no package ``pkg`` in ``package_dirs``,
-            or two of them under one folder.
+        InputError: A bad ``xacro_args`` (not strings; an argument missing, or
+            unknown unless ``extra_args``); a ``$(find pkg)`` with no package
+            ``pkg`` in ``package_dirs``, or two of them under one folder.
         RobotLoadError: The file (or a file it reads) is missing, outside its
             roots, not strict XML, or xacro cannot expand it.
     """
@@ -117,7 +125,7 @@ def expand_xacro(
     if not file.is_file():
         raise RobotLoadError(file, "is a folder, not a file" if file.is_dir() else "file not found")
     scope = _Scope(file.resolve(), package_dirs_of(package_dirs))
-    given = _TrackedArgs(args)
+    given = _TrackedArgs(args, extra_args)
     messages = io.StringIO()
     with _LOCK, _patched_xacro(scope) as xacro, contextlib.redirect_stderr(messages):
         try:
@@ -131,7 +139,7 @@ def expand_xacro(
             XacroWarning(f"xacro, expanding {file}: {' '.join(messages.getvalue().split())}"),
             stacklevel=user_stacklevel(),
         )
-    unknown = sorted(set(args) - given.asked)
+    unknown = [] if extra_args else sorted(set(args) - given.asked)
     if unknown:
         known = ", ".join(repr(a) for a in sorted(given.asked)) or "none"
         guess = _did_you_mean(unknown, given.asked)
@@ -149,11 +157,13 @@ class _TrackedArgs(dict[str, str]):
     Xacro asks ``name in args`` for each ``<xacro:arg>`` and reads ``args[name]``
     for each ``$(arg name)`` or ``xacro.arg(name)``: a given name never asked for
     is unknown to the file, and a name read but absent (``missing``) is an
-    argument the file needs when the expansion then fails on it.
+    argument the file needs when the expansion then fails on it. With ``extra``,
+    names never asked for are not errors (:func:`expand_xacro`'s ``extra_args``).
     """
 
-    def __init__(self, given: Mapping[str, str]) -> None:
+    def __init__(self, given: Mapping[str, str], extra: bool = False) -> None:
         super().__init__(given)
+        self.extra = extra
         self.asked: set[str] = set()
         self.missing: set[str] = set()
 
@@ -354,7 +364,7 @@ def _clik_error(
     from xacro.substitution_args import ArgException
 
     declared = _declared_args(scope.read)
-    unknown = sorted(set(given) - given.asked - set(declared))
+    unknown = [] if given.extra else sorted(set(given) - given.asked - set(declared))
     if unknown:  # a misspelt argument: said, not the failure it causes further on
         names = given.asked | set(declared)
         known = ", ".join(repr(a) for a in sorted(names)) or "none"

@@ -176,7 +176,8 @@ def _robot(scenario: Scenario) -> Robot:
         raise _where(scenario, _robot_key(exc), exc) from None
     except ClikError as exc:
         srdf = spec.get("srdf")
-        about_srdf = isinstance(srdf, str) and Path(getattr(exc, "source", "")) == Path(srdf)
+        source = Path(getattr(exc, "source", ""))  # a xacro SRDF's errors name it resolved
+        about_srdf = isinstance(srdf, str) and source.resolve() == Path(srdf).resolve()
         raise _where(scenario, "robot.srdf" if about_srdf else "robot.source", exc) from None
 
 

@@ -24,7 +24,8 @@ A scenario is data only: TOML has no code, no includes and no variables, and
 no key here names a file to read but ``robot.source``, ``robot.package_dirs``,
 ``robot.srdf`` and an obstacle's mesh ``file``: paths the user chose (absolute, or relative
 to the scenario's folder; URLs are refused, nothing is fetched). A xacro
-``robot.source`` (``.xacro``) takes ``robot.xacro_args``, a table of strings.
+``robot.source`` (``.xacro``) takes ``robot.xacro_args``, a table of strings, which
+also expand an SRDF with xacro markup (``robot.srdf = "arm.srdf.xacro"``).
 """
 
 from __future__ import annotations
@@ -321,9 +322,11 @@ def _robot(rob: Table, folder: Path) -> dict[str, Any]:
     }
     if robot["base_speed"] is not None and robot["base"] == FIXED:
         raise rob.error("base_speed", "no base_speed: robot.base is 'fixed' (no base to move)")
-    if robot["xacro_args"] and not is_xacro(source):
+    srdf = robot["srdf"]
+    if robot["xacro_args"] and not is_xacro(source) and not (srdf and is_xacro(str(srdf))):
         raise rob.error(
-            "xacro_args", "no xacro_args: robot.source is not a xacro file (name ending .xacro)"
+            "xacro_args",
+            "no xacro_args: robot.source is not a xacro file (name ending .xacro), nor robot.srdf",
         )
     rob.done()
     return robot
