@@ -138,6 +138,9 @@ def agreement(path: str | Path, base: str | None = None) -> dict[str, Any]:
         absent = _absent_file(path, str(error))
         if absent:
             notes.append(f"absent file: {absent}")
+            m = _without_absent_visuals(path, notes)
+            if m is not None:
+                result["mujoco"] = "ok (absent visual-only meshes left out)"
     if base is None:
         base = "floating" if m is not None and _root_free_joint(m) is not None else "fixed"
     result["base"] = base
@@ -199,6 +202,46 @@ def _absent_file(path: Path, message: str) -> str | None:
         return None
     name = found.group(1)  # relative to the model's folder (meshdir included)
     return None if (path.parent / name).exists() else name
+
+
+def _without_absent_visuals(path: Path, notes: list[str]) -> Any:
+    """MuJoCo's model without the visual-only geoms whose mesh file is absent, or None.
+
+    What clik loads from such a file (it leaves them out with a warning): so a snapshot
+    without its large visual meshes can still be compared. None when an absent mesh is
+    used by a geom that can touch.
+    """
+    pruned = pruned_spec(path)
+    if pruned is None:
+        return None
+    spec, left_out = pruned
+    try:
+        model = spec.compile()
+    except Exception as error:  # MuJoCo's refusal is recorded, not raised
+        notes.append(f"mujoco refuses without the absent meshes: {_one_line(error)}")
+        return None
+    notes.append(f"{left_out} visual-only geoms of absent meshes left out on both sides")
+    return model
+
+
+def pruned_spec(path: Path) -> tuple[Any, int] | None:
+    """The file's ``MjSpec`` without visual-only geoms of absent meshes, and their count.
+
+    None when an absent mesh is used by a geom that can touch.
+    """
+    import mujoco
+
+    spec = mujoco.MjSpec.from_file(str(path))
+    folder = path.parent / (spec.meshdir or "")
+    absent = {mesh.name for mesh in spec.meshes if not (folder / mesh.file).exists()}
+    users = [g for g in spec.geoms if g.meshname in absent]
+    if any(g.contype or g.conaffinity for g in users):
+        return None
+    for geom in users:
+        spec.delete(geom)
+    for mesh in [m for m in spec.meshes if m.name in absent]:
+        spec.delete(mesh)
+    return spec, len(users)
 
 
 def _root_free_joint(m: Any) -> int | None:
@@ -388,11 +431,15 @@ _MJ_KIND = {2: "Sphere", 3: "Capsule", 4: "Ellipsoid", 5: "Cylinder", 6: "Box", 
 
 
 def _collision_geoms(m: Any) -> list[int]:
-    """MuJoCo's collision geoms of the robot: ``contype`` or ``conaffinity``, not a plane."""
+    """MuJoCo's collision geoms of the robot (clik's rule), not a plane.
+
+    ``contype`` or ``conaffinity`` not zero, or group 3 (the Menagerie's collision group,
+    contacts off for explicit pairs).
+    """
     return [
         g
         for g in range(m.ngeom)
-        if (m.geom_contype[g] or m.geom_conaffinity[g])
+        if (m.geom_contype[g] or m.geom_conaffinity[g] or m.geom_group[g] == 3)
         and int(m.geom_type[g]) not in (0, 1)
         and m.geom_bodyid[g] != 0
     ]
@@ -576,7 +623,11 @@ def _probe(
     import coal
     import pinocchio as pin
 
-    spec = mujoco.MjSpec.from_file(str(path))
+    pruned = pruned_spec(path)
+    if pruned is None:
+        result["notes"].append("an absent mesh can touch: no probes")
+        return
+    spec = pruned[0]
     body = spec.worldbody.add_body(name="clik_agreement_probe", mocap=True)
     body.add_geom(
         name="clik_agreement_probe",

@@ -214,16 +214,13 @@ def base_pose(document: MjcfDocument) -> pin.SE3:
 def place_root(model: pin.Model, document: MjcfDocument) -> None:
     """Place the root body, whose pose the document no longer holds, in ``model``.
 
-    Fixed base: the root body's frames and child joints (those on the world, joint 0)
-    move to :func:`root_placement`. Floating: nothing (the free-flyer's configuration is
-    the root body's pose). Planar: the part of :func:`base_pose` the planar joint does
+    Fixed base: nothing (:func:`~clik.model.mjcf_compiled.build_model` welds the root
+    body at :func:`root_placement`). Floating: nothing (the free-flyer's configuration
+    is the root body's pose). Planar: the part of :func:`base_pose` the planar joint does
     not carry (its height, roll and pitch: ``offset = planar(x, y, yaw)^-1 pose``) goes
     between the root joint and the root body's frames and child joints.
     """
-    if document.base == FLOATING:
-        return
-    if document.base == FIXED:
-        _attach(model, 0, root_placement(document))
+    if document.base in (FLOATING, FIXED):
         return
     pose = base_pose(document)
     x, y, cos, sin = planar_from_free_flyer(np.asarray(pin.SE3ToXYZQUAT(pose)))
@@ -253,7 +250,7 @@ def _read(
     """The model built from MuJoCo's compiled one (unless given) and its geometry of ``kind``."""
     compiled = compile_text(document.text, document.path, document.lines)
     if model is None:
-        model = build_model(compiled, document)
+        model = build_model(compiled, document, root_placement(document))
         document.qpos0 = [float(v) for v in compiled.qpos0]
         place_root(model, document)
     return model, build_geometry(compiled, model, kind)

@@ -151,6 +151,7 @@ def check_mjcf(path: str | Path, base: str = FIXED) -> MjcfDocument:
     drop_visual_meshes(root, missing, fail)
     for attribute in ("meshdir", "texturedir", "assetdir", "strippath"):
         compiler.attrib.pop(attribute, None)
+    compiler.set("fusestatic", "false")  # every body stays a frame (not fused into its parent)
     document = MjcfDocument(path, "", files, degrees, base=base)
     check_world(root, path, fail, document)
     check_geom_sizes(root, fail)

@@ -39,7 +39,11 @@ from clik.model.mjcf_root import MjcfDocument
 FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3
 """MuJoCo's joint types (``mjtJoint``)."""
 
-_AXES: dict[tuple[float, ...], str] = {(1.0, 0.0, 0.0): "X", (0.0, 1.0, 0.0): "Y", (0.0, 0.0, 1.0): "Z"}
+_AXES: dict[tuple[float, ...], str] = {
+    (1.0, 0.0, 0.0): "X",
+    (0.0, 1.0, 0.0): "Y",
+    (0.0, 0.0, 1.0): "Z",
+}
 
 
 def compile_text(text: str, path: Any, lines: dict[int, tuple[str, int]] | None = None) -> Any:
@@ -94,11 +98,14 @@ def se3(position: np.ndarray, quaternion_wxyz: np.ndarray) -> pin.SE3:
     return pin.SE3(rotation, np.array(position, dtype=float))
 
 
-def build_model(mj: Any, document: MjcfDocument) -> pin.Model:
+def build_model(mj: Any, document: MjcfDocument, root_pose: pin.SE3) -> pin.Model:
     """Pinocchio's model of a compiled MJCF robot (see the module's docstring).
 
     The base's root joint (``root_joint``: a planar or free-flyer joint) comes first
-    when ``document.base`` is not fixed; the root body hangs on it.
+    when ``document.base`` is not fixed; the root body hangs on it (other bodies of the
+    world, which hold no joint and no geom, are frames welded to the world). With a
+    fixed base the root body is welded at ``root_pose`` (the pose the file gives it,
+    removed from the document: :attr:`~clik.model.mjcf_root.MjcfDocument.root_probe`).
 
     Raises:
         RobotLoadError: A ball or free joint below the root (naming the body and joint).
@@ -108,13 +115,17 @@ def build_model(mj: Any, document: MjcfDocument) -> pin.Model:
     root = root_joint(document.base)
     # per body: (Pinocchio joint it hangs on, its BODY frame, its placement in that joint)
     hang: dict[int, tuple[int, int, pin.SE3]] = {0: (0, 0, pin.SE3.Identity())}
+    on_world = [b for b in range(1, mj.nbody) if int(mj.body_parentid[b]) == 0]
+    root_body = on_world[document.root_index]
     for body in range(1, mj.nbody):
         parent_joint, parent_frame, parent_pose = hang[int(mj.body_parentid[body])]
-        if root is not None and int(mj.body_parentid[body]) == 0:
+        if root is not None and body == root_body:
             parent_joint = model.addJoint(0, root, pin.SE3.Identity(), BASE_JOINT)
             parent_frame = model.addJointFrame(parent_joint, 0)
             parent_pose = pin.SE3.Identity()
         pose = parent_pose * se3(mj.body_pos[body], mj.body_quat[body])
+        if root is None and body == root_body:
+            pose = root_pose * pose
         hang[body] = _add_body(model, mj, document, body, (parent_joint, parent_frame, pose))
     _add_sites(model, mj, hang)
     _add_keys(model, mj, document)

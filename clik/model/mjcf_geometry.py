@@ -8,8 +8,10 @@ MuJoCo's sizes (``geom_size``). A mesh is MuJoCo's compiled mesh (``mesh_vert``,
 holding that offset). So every shape sits where MuJoCo puts it.
 
 - **Collision** geoms: those that can touch (not both ``contype="0"`` and
-  ``conaffinity="0"``). **Visual** geoms: those of ``group`` 0 to 2 (MuJoCo's viewer
-  shows those by default), so a group 3 geom is collision only.
+  ``conaffinity="0"``), and those of ``group`` 3 (the Menagerie's collision group,
+  where some models keep collision shapes with contacts off). **Visual** geoms: those
+  of ``group`` 0 to 2 (MuJoCo's viewer shows those by default), so a group 3 geom is
+  collision only.
 - Names: the geom's, else ``<body>Geom_<k>`` (its rank among its body's geoms, as
   Pinocchio's reader names them).
 - Planes (a floor) are dropped: the environment is given as obstacles. Geoms of the
@@ -32,10 +34,20 @@ PLANE, SPHERE, CAPSULE, ELLIPSOID, CYLINDER, BOX, MESH = 0, 2, 3, 4, 5, 6, 7
 VISUAL_GROUPS = 3
 """Geoms of a ``group`` below this are drawn (MuJoCo's viewer default)."""
 
+COLLISION_GROUP = 3
+"""A geom of this group is collision geometry even with contacts off."""
+
 
 def is_collision(mj: Any, geom: int) -> bool:
-    """A geom that can touch something: ``contype`` or ``conaffinity`` not zero."""
-    return bool(mj.geom_contype[geom] or mj.geom_conaffinity[geom])
+    """A geom that can touch (``contype`` or ``conaffinity`` not zero), or of group 3.
+
+    Group 3 is the Menagerie's collision group: some models keep their collision shapes
+    there with contacts off (``contype="0" conaffinity="0"``), for explicit pairs.
+    """
+    return (
+        bool(mj.geom_contype[geom] or mj.geom_conaffinity[geom])
+        or int(mj.geom_group[geom]) == COLLISION_GROUP
+    )
 
 
 def build_geometry(mj: Any, model: pin.Model, kind: pin.GeometryType) -> pin.GeometryModel:

@@ -76,6 +76,9 @@ class MjcfDocument:
             element came from: MuJoCo's compiler's messages name lines of ``text``.
         qpos0: MuJoCo's ``qpos0`` of the compiled document (each joint's ``ref``; the
             root body's free joint is not in it), set when the model is built.
+        root_index: The root body's rank among the ``<worldbody>``'s bodies; the others
+            hold no joint and no geom (frames such as a ``world_link``, welded to the
+            world).
     """
 
     path: Path
@@ -89,6 +92,7 @@ class MjcfDocument:
     home_joints: list[float] | None = None
     lines: dict[int, tuple[str, int]] = field(default_factory=dict)
     qpos0: list[float] | None = None
+    root_index: int = 0
 
 
 def _in_world(element: etree._Element) -> bool:
@@ -99,9 +103,11 @@ def _in_world(element: etree._Element) -> bool:
 def check_world(root: etree._Element, path: Path, fail: Fail, document: MjcfDocument) -> None:
     """One root body, budgets; its free joint and pose removed into ``document``."""
     world = root.find("worldbody")
-    bodies = [] if world is None else world.findall("body")
+    world_bodies = [] if world is None else world.findall("body")
+    bodies = [b for b in world_bodies if not _empty(b)]  # empty ones: frames on the world
     if not bodies:
         raise fail("the model has no <body> in its <worldbody>: no robot to load", world)
+    document.root_index = world_bodies.index(bodies[0])
     if len(bodies) > 1:
         names = ", ".join(shown(b.get("name", "(unnamed)")) for b in bodies[:10])
         raise fail(
@@ -143,6 +149,11 @@ def check_world(root: etree._Element, path: Path, fail: Fail, document: MjcfDocu
             "(clik.model.urdf_check.MAX_MOVABLE_JOINTS)",
             bodies[0],
         )
+
+
+def _empty(body: etree._Element) -> bool:
+    """A body holding no joint and no geom (a frame, possibly with sites): kept, welded."""
+    return not any(True for _ in body.iter("joint", "freejoint", "geom"))
 
 
 def _read_keys(root: etree._Element, free: bool, fail: Fail, document: MjcfDocument) -> None:

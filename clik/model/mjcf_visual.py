@@ -1,7 +1,8 @@
 """Missing visual-only meshes of an MJCF model: left out with a warning, as for a URDF.
 
-A ``<mesh>`` asset whose file is not found is refused when a geom that can touch
-(``contype`` or ``conaffinity`` not zero, through its default classes) uses it: the
+A ``<mesh>`` asset whose file is not found is refused when a collision geom (one that
+can touch, ``contype`` or ``conaffinity`` not zero through its default classes, or of
+``group`` 3) uses it: the
 collision rows would protect a shape clik does not have. When every geom using it is
 visual only (both zero), those geoms and the asset leave the document and
 :class:`~clik.model.visual_meshes.MissingVisualMeshWarning` names the body, the file
@@ -60,8 +61,13 @@ def drop_visual_meshes(
 def _visual_only(
     geom: etree._Element, classes: dict[str | None, etree._Element], top: etree._Element | None
 ) -> bool:
-    """Both ``contype`` and ``conaffinity`` zero (MuJoCo's default is 1 for each)."""
+    """Both ``contype`` and ``conaffinity`` zero (MuJoCo's default is 1), not group 3.
+
+    Group 3 is collision geometry (:func:`clik.model.mjcf_geometry.is_collision`).
+    """
     chain = geom_chain(geom, classes, top)
+    if (geom_attribute(geom, "group", chain) or "0").strip() == "3":
+        return False
     return all(
         (geom_attribute(geom, attribute, chain) or "1").strip() == "0"
         for attribute in ("contype", "conaffinity")
