@@ -27,6 +27,7 @@ from clik.outputs.rosbag_export import (
     check_rosbags,
     export_rosbag,
 )
+from clik.outputs.velocity_report import speed_line
 
 if TYPE_CHECKING:
     from clik.tasks.goal import Goal
@@ -74,14 +75,9 @@ def print_summary(name: str, summary: dict) -> None:
     print_task_errors(summary)
     if summary.get("min_obstacle_distance") is not None:
         print(f"  min link-obstacle distance {summary['min_obstacle_distance']:.4f} m")
-    ratio = summary.get("max_velocity_ratio")
-    if ratio is not None:
-        over = ", ".join(
-            f"{v['joint']} x{v['max_ratio']:.2f} from t = {v['t_first']:.3f} s"
-            for v in summary.get("velocity", [])
-        )
-        line = f"  joint speed: max |qdot| / URDF limit {ratio:.2f}"
-        print(line + (f" (over the limit: {over})" if over else ""))
+    speeds = speed_line(summary)
+    if speeds is not None:
+        print(f"  {speeds}")
     if summary["events"]:
         print(
             "  events: "

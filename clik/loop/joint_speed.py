@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clik.errors import ClikWarning, InputError, JointNotFound
-from clik.outputs.velocity_report import velocity_names
+from clik.outputs.velocity_report import file_sources, velocity_names
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
@@ -121,10 +121,12 @@ class JointSpeed:
         urdf = np.array(model.velocityLimit, dtype=float)
         given = np.isfinite(urdf) & (urdf > 0.0)
         vmax = np.where(given, urdf, self.default_velocity)
+        source = file_sources(model, given, "default")
         for name, limit in (self.velocity or {}).items():
             span = _span(model, name)
             vmax[span] = limit
             given[span] = True
+            source[span] = ["setting"] * len(source[span])
         unlimited = sorted({names[i].split("[")[0] for i in np.flatnonzero(~given)})
         amax: np.ndarray | None = None
         if isinstance(self.acceleration, Mapping):
@@ -147,7 +149,7 @@ class JointSpeed:
                 SpeedLimitWarning,
                 stacklevel=3,
             )
-        return JointSpeedBounds(names, self.scale * vmax, amax, unlimited, self)
+        return JointSpeedBounds(names, self.scale * vmax, amax, unlimited, self, vmax, source)
 
 
 def _span(model: Any, name: str) -> slice:
@@ -170,6 +172,9 @@ class JointSpeedBounds:
             acceleration limit at all.
         unlimited: Joints whose URDF gives no velocity limit (``default_velocity`` used).
         settings: The settings they come from.
+        limit: ``vmax_i`` (nv,) [rad/s or m/s], before the scale.
+        source: Where each ``vmax_i`` comes from (nv,): ``"urdf"``, ``"setting"``,
+            ``"default"`` or ``"base_speed"`` (:mod:`clik.outputs.velocity_report`).
     """
 
     names: list[str]
@@ -177,6 +182,8 @@ class JointSpeedBounds:
     acceleration: np.ndarray | None
     unlimited: list[str]
     settings: JointSpeed
+    limit: np.ndarray
+    source: list[str]
 
     def as_info(self) -> dict[str, Any]:
         """``result.info["joint_speed"]``: the settings and the bounds, JSON-ready."""
@@ -189,4 +196,6 @@ class JointSpeedBounds:
             else [float(a) if math.isfinite(a) else None for a in acc],
             "default_velocity": self.settings.default_velocity,
             "unlimited": list(self.unlimited),
+            "limit": [float(v) for v in self.limit],
+            "source": list(self.source),
         }

@@ -139,10 +139,11 @@ def speed_excess(result: TrackingResult) -> str | None:
     k, i = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
     names = result.velocity_limits.names if result.velocity_limits is not None else []
     name = names[i] if i < len(names) else f"coordinate {i}"
+    sources = result.velocity_limits.sources() if result.velocity_limits is not None else []
     which = (
         "the law's bound"
         if "velocity" in (result.info.get("joint_speed") or {})
-        else ("its URDF limit")
+        else ("its base speed" if sources[i : i + 1] == ["base_speed"] else "its URDF limit")
     )
     return (
         f"joint {name} above its speed limit: {speed[k, i]:.4g} at t = {result.t[k]:.6g} s, "

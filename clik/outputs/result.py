@@ -26,7 +26,12 @@ from clik.outputs.export import (
 )
 from clik.outputs.io import atomic_write, json_safe, json_text
 from clik.outputs.speed_record import max_acceleration_ratio, speed_limited
-from clik.outputs.velocity_report import VelocityLimits, model_velocity_limits, velocity_report
+from clik.outputs.velocity_report import (
+    VelocityLimits,
+    model_velocity_limits,
+    run_velocity_limits,
+    velocity_report,
+)
 from clik.tasks.manipulability import manipulability_record, min_manipulability
 
 if TYPE_CHECKING:
@@ -170,11 +175,8 @@ class TrackingResult:
         }
         if self.orientation_error_norm is not None and self.reference_position is not None:
             summary["max_orientation_error"] = float(np.max(self.orientation_error_norm))
-        speeds = velocity_report(
-            self.t, self.qdot, self.velocity_limits or VelocityLimits([], np.zeros(0))
-        )
-        summary["max_velocity_ratio"] = speeds.max_velocity_ratio
-        summary["velocity"] = speeds.records
+        bounds = run_velocity_limits(self.info, self.velocity_limits)
+        summary.update(velocity_report(self.t, self.qdot, bounds).as_summary())
         names = self.velocity_limits.names if self.velocity_limits is not None else []
         limited, limited_time = speed_limited(self.t, self.qdot, names, self.info)
         summary["speed_limited"] = limited
@@ -231,6 +233,7 @@ class TrackingResult:
         if self.velocity_limits is not None:
             arrays["velocity_limit"] = self.velocity_limits.limit
             arrays["velocity_names"] = np.array(self.velocity_limits.names, dtype=str)
+            arrays["velocity_source"] = np.array(self.velocity_limits.sources(), dtype=str)
         meta = {
             "status": self.status,
             "reason": self.reason,
@@ -259,7 +262,9 @@ class TrackingResult:
         limits = None
         if "velocity_limit" in arrays and "velocity_names" in arrays:
             names = [str(n) for n in arrays["velocity_names"]]
-            limits = VelocityLimits(names, arrays["velocity_limit"])
+            source = arrays.pop("velocity_source", None)
+            source = None if source is None else [str(s) for s in source]
+            limits = VelocityLimits(names, arrays["velocity_limit"], source)
         return cls(
             **kwargs,
             joint_min=arrays["joint_min"],

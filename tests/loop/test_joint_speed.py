@@ -200,6 +200,8 @@ def test_the_engine_refuses_bad_bounds(planar4r):
             None,
             [],
             tracker.speed.settings,  # type: ignore[union-attr]
+            vmax,
+            ["urdf"] * vmax.size,
         )
         with pytest.raises(ValueError, match="vmax"):
             tracker.run(line, q0)

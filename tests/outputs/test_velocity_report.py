@@ -2,6 +2,8 @@
 
 The expected numbers are computed here from the recorded arrays (``trajectory.npz``)
 and the model's ``velocityLimit``, independently of :mod:`clik.outputs.velocity_report`.
+The bounds of other sources (a setting, the default, a base's speed):
+``test_velocity_bounds.py``.
 """
 
 from __future__ import annotations
@@ -32,7 +34,9 @@ FAST_S = 0.15
 SLOW_S = 3.0
 """Duration of the slow Panda line: the same 0.3 m in 3 s [s]."""
 
-RECORD_KEYS = {"joint", "max_ratio", "max_velocity", "limit", "t_first", "t_last", "samples"}
+RECORD_KEYS = {
+    "joint", "max_ratio", "max_velocity", "limit", "source", "t_first", "t_last", "samples",
+}  # fmt: skip
 
 
 def panda_line(panda: clik.Robot, duration: float) -> TrackingResult:
@@ -70,6 +74,7 @@ def expected_report(
                     "max_ratio": ratio,
                     "max_velocity": speed.max(),
                     "limit": vmax,
+                    "source": "urdf",
                     "t_first": above[0],
                     "t_last": above[-1],
                     "samples": above.size,
@@ -82,7 +87,7 @@ def assert_records_equal(got: list[dict], expected: list[dict]) -> None:
     assert [r["joint"] for r in got] == [r["joint"] for r in expected]
     for g, e in zip(got, expected, strict=True):
         assert set(g) == RECORD_KEYS
-        assert g["samples"] == e["samples"]
+        assert g["samples"] == e["samples"] and g["source"] == e["source"]
         for key in ("max_ratio", "max_velocity", "limit", "t_first", "t_last"):
             assert g[key] == pytest.approx(e[key], rel=1e-12, abs=1e-9), key
 
@@ -107,6 +112,13 @@ def test_fast_panda_line_reports_each_joint_over_its_limit(fast, panda, tmp_path
     ratio, records = expected_report(t, qdot, panda.joint_names, limit)
     assert ratio is not None and ratio > 1.5
     assert summary["max_velocity_ratio"] == pytest.approx(ratio, rel=1e-12)
+    top = int(np.argmax(np.abs(qdot).max(axis=0) / limit))
+    assert summary["max_velocity_ratio_joint"] == panda.joint_names[top]
+    assert summary["max_velocity_ratio_source"] == "urdf"
+    assert on_disk["velocity_bounds"] == {
+        name: {"bound": v, "source": "urdf"}
+        for name, v in zip(panda.joint_names, limit, strict=True)
+    }
     assert len(records) >= 2
     assert_records_equal(summary["velocity"], records)
     over = {r["joint"] for r in records}
@@ -119,6 +131,7 @@ def test_a_loaded_result_reports_the_same_speeds(fast, tmp_path):
     assert back.robot is None
     assert back.summary()["max_velocity_ratio"] == fast.summary()["max_velocity_ratio"]
     assert back.summary()["velocity"] == fast.summary()["velocity"]
+    assert back.summary()["velocity_bounds"] == fast.summary()["velocity_bounds"]
 
 
 def test_existing_summary_keys_are_kept(fast):
@@ -141,7 +154,8 @@ def test_slow_panda_line_stays_under_its_limits(panda):
     assert 0.0 < summary["max_velocity_ratio"] < 1.0
 
 
-def test_robot_without_velocity_limits_reports_null(tmp_path):
+def test_robot_without_velocity_limits_and_no_law_bound_reports_null(tmp_path):
+    """No URDF limit and the law's joint speed limits off: nothing bounds a joint."""
     # j1 continuous with no <limit> (inf), j2 and j3 with velocity="0" (no limit)
     path = tmp_path / "unlimited.urdf"
     path.write_text(urdf_text(CONTINUOUS_BODY.replace('velocity="1"', 'velocity="0"')))
@@ -150,12 +164,17 @@ def test_robot_without_velocity_limits_reports_null(tmp_path):
     task = clik.Task(robot, "tip", "position", axes=["x", "y"])
     q0 = np.array([1.0, 0.0, 0.5, 0.05])
     start = task.placement(q0).translation
-    result = clik.track(task, Line(start, start + [0.0, 0.05, 0.0], duration=0.1), q0=q0)
+    line = Line(start, start + [0.0, 0.05, 0.0], duration=0.1)
+    result = clik.track(task, line, q0=q0, joint_speed=None)
     assert result.status == "completed"
     assert_within_limits(result, robot)
     summary = result.summary()
     assert summary["max_velocity_ratio"] is None and summary["velocity"] == []
     assert json.loads(json.dumps(summary))["max_velocity_ratio"] is None
+    assert summary["max_velocity_ratio_joint"] is None
+    assert summary["velocity_bounds"] == {
+        j: {"bound": None, "source": "none"} for j in ("j1", "j2", "j3")
+    }
 
 
 def test_unlimited_coordinates_are_skipped_and_non_finite_speeds_ignored():
@@ -164,13 +183,15 @@ def test_unlimited_coordinates_are_skipped_and_non_finite_speeds_ignored():
     t = np.array([0.0, 0.1, 0.2, 0.3])
     qdot = np.array([[0.5, 9, 9, 9], [-1.5, 9, 9, 9], [2.0, 9, 9, 9], [math.nan, 9, 9, 9]])
     report = velocity_report(t, qdot, limits)
-    assert report.max_velocity_ratio == 2.0
+    assert report.max_velocity_ratio == 2.0 and report.joint == "a"
+    assert [b["source"] for b in report.bounds.values()] == ["urdf", "none", "none", "none"]
     assert report.records == [
         {
             "joint": "a",
             "max_ratio": 2.0,
             "max_velocity": 2.0,
             "limit": 1.0,
+            "source": "urdf",
             "t_first": 0.1,
             "t_last": 0.2,
             "samples": 2,
