@@ -44,7 +44,7 @@ from clik.loop.start_checks import StartWarning
 from clik.loop.tracker import ReachWarning, StabilityWarning, Tracker, track
 from clik.model.loading import ReferenceClippedWarning
 from clik.model.mimic import MimicJointWarning
-from clik.model.mjcf_root import FreeJointWeldedWarning
+from clik.model.mjcf_root import EqualityIgnoredWarning, FreeJointWeldedWarning
 from clik.model.robot import Robot
 from clik.model.srdf import SrdfWarning
 from clik.model.srdf_names import SrdfMismatchWarning
@@ -71,6 +71,7 @@ __all__ = [
     "Controller",
     "DistanceTask",
     "EngineError",
+    "EqualityIgnoredWarning",
     "ExportError",
     "FrameNotFound",
     "FreeJointWeldedWarning",

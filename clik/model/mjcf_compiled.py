@@ -27,14 +27,15 @@ joints' ``actuatorfrcrange`` when limited.
 from __future__ import annotations
 
 import re
+import warnings
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
-from clik.errors import RobotLoadError
+from clik.errors import RobotLoadError, user_stacklevel
 from clik.model.base import BASE_JOINT, root_joint
-from clik.model.mjcf_root import MjcfDocument
+from clik.model.mjcf_root import EqualityIgnoredWarning, MjcfDocument
 
 FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3
 """MuJoCo's joint types (``mjtJoint``)."""
@@ -129,7 +130,32 @@ def build_model(mj: Any, document: MjcfDocument, root_pose: pin.SE3) -> pin.Mode
         hang[body] = _add_body(model, mj, document, body, (parent_joint, parent_frame, pose))
     _add_sites(model, mj, hang)
     _add_keys(model, mj, document)
+    _warn_equalities(mj, document)
     return model
+
+
+EQUALITY_KINDS = ("connect", "weld", "joint", "tendon", "flex", "flexvert", "flexstrain")
+"""MuJoCo's equality types (``mjtEq``) by number, as the file writes them."""
+
+
+def _warn_equalities(mj: Any, document: MjcfDocument) -> None:
+    """Warn once, with their kinds and counts, when the model has equality constraints."""
+    if mj.neq == 0:
+        return
+    kinds: dict[str, int] = {}
+    for eq in range(mj.neq):
+        kind = int(mj.eq_type[eq])
+        name = EQUALITY_KINDS[kind] if kind < len(EQUALITY_KINDS) else f"type {kind}"
+        kinds[name] = kinds.get(name, 0) + 1
+    counted = ", ".join(f"{n} {k}" for k, n in kinds.items())
+    warnings.warn(
+        EqualityIgnoredWarning(
+            f"{document.path}: the model's {mj.neq} <equality> constraint(s) ({counted}) are "
+            "not applied: clik moves its joints independently (MuJoCo holds them by forces "
+            "in simulation); lock coupled joints (lock=...) when it matters"
+        ),
+        stacklevel=user_stacklevel(),
+    )
 
 
 def _add_body(

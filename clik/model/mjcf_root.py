@@ -47,6 +47,15 @@ class FreeJointWeldedWarning(ClikWarning):
     """
 
 
+class EqualityIgnoredWarning(ClikWarning):
+    """The model's ``<equality>`` constraints are not applied by clik.
+
+    MuJoCo holds them by forces in simulation (closed chains, a gripper's coupled
+    fingers); clik's joints move independently. Lock the joints or write the coupling
+    as a URDF mimic joint when it matters.
+    """
+
+
 @dataclass
 class MjcfDocument:
     """An MJCF model as clik hands it to MuJoCo's compiler: one checked, self-contained document.

@@ -272,3 +272,22 @@ def test_the_several_joints_body_tracks_past_an_obstacle_in_both_engines(tmp_pat
         assert ("obstacle:post:base", "activate") in actions, actions  # the chassis met it
         results[engine] = result
     np.testing.assert_allclose(results["python"].q, results["compiled"].q, atol=1e-9)
+
+
+def test_equality_constraints_are_named_as_not_applied(tmp_path):
+    body = (
+        '<body name="b1"><joint name="j1" axis="0 0 1"/><geom size="0.1"/>'
+        '<body name="b2" pos="0 0 0.2"><joint name="j2" axis="0 1 0"/><geom size="0.05"/>'
+        "</body></body>"
+    )
+    tail = (
+        '<equality><joint joint1="j1" joint2="j2"/>'
+        '<connect body1="b1" body2="b2" anchor="0 0 0.1"/></equality>'
+    )
+    path = tmp_path / "coupled.xml"
+    path.write_text(f'<mujoco model="c"><worldbody>{body}</worldbody>{tail}</mujoco>')
+    with pytest.warns(
+        clik.EqualityIgnoredWarning, match=r"2 <equality> constraint\(s\) \(1 joint, 1 connect\)"
+    ):
+        robot = clik.Robot.load(path)
+    assert robot.joint_names == ["j1", "j2"]  # still two independent joints
