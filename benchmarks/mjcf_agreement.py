@@ -101,6 +101,31 @@ MENAGERIE_MODELS = (
     "anybotics_anymal_c/anymal_c.xml",
     "boston_dynamics_spot/spot.xml",
     "agility_cassie/cassie.xml",
+    "agilex_piper/piper.xml",
+    "aloha/aloha.xml",
+    "arx_l5/arx_l5.xml",
+    "franka_fr3_v2/fr3v2.xml",
+    "i2rt_yam/yam.xml",
+    "low_cost_robot_arm/low_cost_robot_arm.xml",
+    "robotstudio_so101/so101.xml",
+    "trs_so_arm100/so_arm100.xml",
+    "trossen_wx250s/wx250s.xml",
+    "trossen_wxai/trossen_ai_bimanual.xml",
+    "dynamixel_2r/dynamixel_2r.xml",
+    "google_robot/robot.xml",
+    "pal_tiago_dual/tiago_dual.xml",
+    "berkeley_humanoid/berkeley_humanoid.xml",
+    "fourier_n1/n1.xml",
+    "pndbotics_adam_lite/adam_lite.xml",
+    "toddlerbot_2xc/toddlerbot_2xc.xml",
+    "toddlerbot_2xm/toddlerbot_2xm.xml",
+    "anybotics_anymal_b/anymal_b.xml",
+    "google_barkour_vb/barkour_vb.xml",
+    "shadow_hand/right_hand.xml",
+    "leap_hand/right_hand.xml",
+    "wonik_allegro/right_hand.xml",
+    "robotiq_2f85/2f85.xml",
+    "shadow_dexee/shadow_dexee.xml",
 )
 """Menagerie models run by ``--menagerie`` (arms, humanoids, mobile and legged robots)."""
 
@@ -550,10 +575,19 @@ def _points_support(points: np.ndarray) -> Support:
 
 
 def _mujoco_vertices(m: Any, d: Any, g: int) -> np.ndarray:
-    """A mesh geom's vertices in the world (MuJoCo's re-centred vertices, placed)."""
+    """A mesh geom's vertices in the world (MuJoCo's re-centred vertices, placed).
+
+    Those of the convex hull MuJoCo collides (``mesh_graph``, ``maxhullvert`` applied)
+    when it computed one.
+    """
     mesh = int(m.geom_dataid[g])
     start, count = int(m.mesh_vertadr[mesh]), int(m.mesh_vertnum[mesh])
     vertices = np.asarray(m.mesh_vert[start : start + count], dtype=float)
+    graph = int(m.mesh_graphadr[mesh])
+    if graph >= 0:  # numvert, numface, vert_edgeadr[numvert], vert_globalid[numvert], ...
+        n_vert = int(m.mesh_graph[graph])
+        ids = np.asarray(m.mesh_graph[graph + 2 + n_vert : graph + 2 + 2 * n_vert], dtype=int)
+        vertices = vertices[ids]
     return vertices @ d.geom_xmat[g].reshape(3, 3).T + d.geom_xpos[g]
 
 

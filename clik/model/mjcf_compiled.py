@@ -129,6 +129,7 @@ def build_model(mj: Any, document: MjcfDocument, root_pose: pin.SE3) -> pin.Mode
             pose = root_pose * pose
         hang[body] = _add_body(model, mj, document, body, (parent_joint, parent_frame, pose))
     _add_sites(model, mj, hang)
+    _unique_frame_names(model)
     _add_keys(model, mj, document)
     _warn_equalities(mj, document)
     return model
@@ -246,6 +247,30 @@ def _add_sites(model: pin.Model, mj: Any, hang: dict[int, tuple[int, int, pin.SE
         name = str(mj.site(site).name) or f"site{site}"
         placement = pose * se3(mj.site_pos[site], mj.site_quat[site])
         model.addFrame(pin.Frame(name, joint, frame, placement, pin.OP_FRAME))
+
+
+_FRAME_RANK = {pin.BODY: 0, pin.OP_FRAME: 1, pin.FIXED_JOINT: 2, pin.JOINT: 3}
+_FRAME_SUFFIX = {pin.OP_FRAME: "_site", pin.FIXED_JOINT: "_fixed", pin.JOINT: "_joint"}
+
+
+def _unique_frame_names(model: pin.Model) -> None:
+    """One frame per name: MuJoCo lets a body, a site and a joint share one.
+
+    The body keeps the name, then a site, a welded body's ``FIXED_JOINT`` frame, a
+    joint's frame; the others get ``_site``, ``_fixed`` or ``_joint`` appended (joint
+    names, in ``model.names``, do not change).
+    """
+    by_name: dict[str, list[pin.Frame]] = {}
+    for frame in model.frames:
+        by_name.setdefault(str(frame.name), []).append(frame)
+    taken = set(by_name)
+    for name, frames in by_name.items():
+        for frame in sorted(frames, key=lambda f: _FRAME_RANK.get(f.type, 4))[1:]:
+            new = f"{name}{_FRAME_SUFFIX.get(frame.type, '_frame')}"
+            while new in taken:
+                new += "_"
+            frame.name = new
+            taken.add(new)
 
 
 def _add_keys(model: pin.Model, mj: Any, document: MjcfDocument) -> None:

@@ -5,7 +5,9 @@ Each geom of a body becomes a Pinocchio geometry object on the body's frame
 ``geom_quat``: default classes, ``fromto`` and orientations already applied), with
 MuJoCo's sizes (``geom_size``). A mesh is MuJoCo's compiled mesh (``mesh_vert``,
 ``mesh_face``: the file scaled, moved to its centre and principal axes, the geom's pose
-holding that offset). So every shape sits where MuJoCo puts it.
+holding that offset); a collision mesh is MuJoCo's convex hull of it (``mesh_graph``,
+with ``maxhullvert`` applied: the shape MuJoCo collides). So every shape sits where
+MuJoCo puts it, and is the one MuJoCo uses.
 
 - **Collision** geoms: those that can touch (not both ``contype="0"`` and
   ``conaffinity="0"``), and those of ``group`` 3 (the Menagerie's collision group,
@@ -68,7 +70,7 @@ def build_geometry(mj: Any, model: pin.Model, kind: pin.GeometryType) -> pin.Geo
         frame_id = model.getFrameId(body_name(mj, body), pin.BODY)
         frame = model.frames[frame_id]
         placement = frame.placement * se3(mj.geom_pos[geom], mj.geom_quat[geom])
-        shape, path = _shape(mj, geom, meshes)
+        shape, path = _shape(mj, geom, meshes, hull=kind == pin.COLLISION)
         go = pin.GeometryObject(_geom_name(mj, geom), frame.parentJoint, frame_id, placement, shape)
         go.meshPath = path
         geometry.addGeometryObject(go)
@@ -88,9 +90,13 @@ def _geom_name(mj: Any, geom: int) -> str:
 
 
 def _shape(
-    mj: Any, geom: int, meshes: dict[int, coal.CollisionGeometry]
+    mj: Any, geom: int, meshes: dict[int, coal.CollisionGeometry], hull: bool
 ) -> tuple[coal.CollisionGeometry, str]:
-    """The coal shape of a geom (sizes [m] as MuJoCo compiled them) and its mesh file."""
+    """The coal shape of a geom (sizes [m] as MuJoCo compiled them) and its mesh file.
+
+    With ``hull``, a mesh is MuJoCo's collision hull (``mesh_graph``: the convex hull
+    MuJoCo collides, ``maxhullvert`` applied) when MuJoCo computed one.
+    """
     kind = int(mj.geom_type[geom])
     size = np.array(mj.geom_size[geom], dtype=float)
     if kind == SPHERE:
@@ -105,18 +111,33 @@ def _shape(
         return coal.Ellipsoid(*size), ""
     mesh = int(mj.geom_dataid[geom])
     if mesh not in meshes:
-        meshes[mesh] = _mesh(mj, mesh)
+        meshes[mesh] = _mesh(mj, mesh, hull)
     return meshes[mesh], _mesh_path(mj, mesh)
 
 
-def _mesh(mj: Any, mesh: int) -> coal.BVHModelOBBRSS:
-    """MuJoCo's compiled mesh (scaled, in its centred frame) as a coal triangle mesh."""
+def _mesh(mj: Any, mesh: int, hull: bool) -> coal.BVHModelOBBRSS:
+    """MuJoCo's compiled mesh (scaled, in its centred frame) as a coal triangle mesh.
+
+    With ``hull`` and a ``mesh_graph`` (MuJoCo's convex hull of a collision mesh:
+    ``numvert, numface, vert_edgeadr[numvert], vert_globalid[numvert],
+    edge_localid[numvert + 3 numface], face_globalid[3 numface]``), the hull's vertices
+    and faces only.
+    """
     start, count = int(mj.mesh_vertadr[mesh]), int(mj.mesh_vertnum[mesh])
     first, faces = int(mj.mesh_faceadr[mesh]), int(mj.mesh_facenum[mesh])
     vertices = np.array(mj.mesh_vert[start : start + count], dtype=float)
     triangles = np.array(mj.mesh_face[first : first + faces], dtype=np.int64)
+    graph = int(mj.mesh_graphadr[mesh])
+    if hull and graph >= 0:
+        n_vert, n_face = int(mj.mesh_graph[graph]), int(mj.mesh_graph[graph + 1])
+        ids = np.array(mj.mesh_graph[graph + 2 + n_vert : graph + 2 + 2 * n_vert], dtype=np.int64)
+        at = graph + 2 + 3 * n_vert + 3 * n_face
+        face_ids = np.array(mj.mesh_graph[at : at + 3 * n_face], dtype=np.int64)
+        local = np.full(count, -1, dtype=np.int64)
+        local[ids] = np.arange(n_vert)
+        vertices, triangles = vertices[ids], local[face_ids].reshape(-1, 3)
     bvh = coal.BVHModelOBBRSS()
-    bvh.beginModel(faces, count)
+    bvh.beginModel(len(triangles), len(vertices))
     bvh.addVertices(vertices)
     bvh.addTriangles(triangles)
     bvh.endModel()

@@ -38,8 +38,8 @@ def check_geom_sizes(root: etree._Element, fail: Fail) -> None:
     for geom in [] if world is None else world.iter("geom"):
         chain = geom_chain(geom, classes, top)
         shape = geom_attribute(geom, "type", chain) or "sphere"
-        if shape not in NEEDED_SIZES:
-            continue  # a mesh (its file gives the shape), a plane (dropped)
+        if shape not in NEEDED_SIZES or geom_attribute(geom, "mesh", chain) is not None:
+            continue  # a mesh, a shape MuJoCo fits to a mesh (its file gives it), a plane
         fromto = geom_attribute(geom, "fromto", chain) is not None
         needed = WITH_FROMTO[shape] if fromto else NEEDED_SIZES[shape]
         written = geom_attribute(geom, "size", chain) or ""

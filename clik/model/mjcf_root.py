@@ -110,7 +110,11 @@ def _in_world(element: etree._Element) -> bool:
 
 
 def check_world(root: etree._Element, path: Path, fail: Fail, document: MjcfDocument) -> None:
-    """One root body, budgets; its free joint and pose removed into ``document``."""
+    """The root bodies, budgets; the first one's free joint and pose removed into ``document``.
+
+    Several root bodies (a bimanual cell) load with a fixed base only, the others
+    welded where the file places them; empty bodies (no joint, no geom) are frames.
+    """
     world = root.find("worldbody")
     world_bodies = [] if world is None else world.findall("body")
     bodies = [b for b in world_bodies if not _empty(b)]  # empty ones: frames on the world
@@ -118,18 +122,13 @@ def check_world(root: etree._Element, path: Path, fail: Fail, document: MjcfDocu
         raise fail("the model has no <body> in its <worldbody>: no robot to load", world)
     document.root_index = world_bodies.index(bodies[0])
     if len(bodies) > 1:
-        names = ", ".join(shown(b.get("name", "(unnamed)")) for b in bodies[:10])
-        raise fail(
-            f"the <worldbody> holds {len(bodies)} bodies ({names}): clik loads one robot, "
-            "one root body, per model (give the environment as obstacles)",
-            bodies[1],
-        )
-    all_bodies = list(bodies[0].iter("body"))
+        _check_more_roots(bodies, document, fail)
+    all_bodies = [b for body in bodies for b in body.iter("body")]
     geoms = [g for g in root.iter("geom") if _in_world(g)]
     if max(len(all_bodies), len(geoms)) > MAX_BODIES:
         found = f"{len(all_bodies)} bodies and {len(geoms)} geoms"
         raise fail(f"the model has {found}, above the budget of {MAX_BODIES} (MAX_BODIES)")
-    joints = [j for j in bodies[0].iter("joint", "freejoint")]
+    joints = [j for body in bodies for j in body.iter("joint", "freejoint")]
     free = [j for j in joints if j.tag == "freejoint" or j.get("type") == "free"]
     welded = None
     for joint in free:
@@ -158,6 +157,30 @@ def check_world(root: etree._Element, path: Path, fail: Fail, document: MjcfDocu
             "(clik.model.urdf_check.MAX_MOVABLE_JOINTS)",
             bodies[0],
         )
+
+
+def _check_more_roots(bodies: list[etree._Element], document: MjcfDocument, fail: Fail) -> None:
+    """Several root bodies (two arms on a table): fixed base only, no free body among them.
+
+    The first is the root body (its free joint, if any, handled as for one root); the
+    others are welded to the world where the file places them.
+    """
+    names = ", ".join(shown(b.get("name", "(unnamed)")) for b in bodies[:10])
+    if document.base != FIXED:
+        raise fail(
+            f"the <worldbody> holds {len(bodies)} bodies ({names}): a {document.base} base "
+            'moves one root body; load it with base="fixed" (each body welded where the '
+            "file places it) or keep one robot per file",
+            bodies[1],
+        )
+    for body in bodies[1:]:
+        for joint in body.iter("joint", "freejoint"):
+            if joint.tag == "freejoint" or joint.get("type") == "free":
+                raise fail(
+                    f"body {shown(body.get('name', '(unnamed)'))} has a free joint: a second "
+                    "free body is an object, not part of the robot (give it as an obstacle)",
+                    joint,
+                )
 
 
 def _empty(body: etree._Element) -> bool:

@@ -408,9 +408,11 @@ def test_over_budget_included_file_is_refused(tmp_path, monkeypatch):
 
 BAD = {
     "not mujoco root": ('<mujoco model="x"/>', None),
-    "two root bodies": (
-        model().replace("</worldbody>", '<body name="b9"><geom size="0.1"/></body></worldbody>'),
-        "the <worldbody> holds 2 bodies ('b1', 'b9'): clik loads one robot, one root body",
+    "a second free body": (
+        model().replace(
+            "</worldbody>", '<body name="b9"><freejoint/><geom size="0.1"/></body></worldbody>'
+        ),
+        "body 'b9' has a free joint: a second free body is an object",
     ),
     "no joint": (
         model().replace('<joint name="j1" axis="0 0 1" range="-1 1"/>', ""),

@@ -16,6 +16,7 @@ import struct
 import warnings
 from pathlib import Path
 
+import coal
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -101,6 +102,16 @@ CASES = {
         '<frame pos="0 0 0.2" euler="0 40 0"><body name="b2"><joint name="j2" axis="0 0 1"'
         ' type="slide" range="-0.1 0.1"/><geom name="g2" type="ellipsoid" size="0.03 0.02 0.01"/>'
         '<site name="tip" pos="0.05 0 0" euler="90 0 0"/></body></frame></body>',
+    ),
+    "two arms on the world, a primitive fitted to a mesh": (
+        '<asset><mesh name="block" file="block_mm.stl" scale="0.001 0.001 0.001"/></asset>',
+        '<body name="left" pos="0 0.3 0"><joint name="l1" axis="0 0 1" range="-2 2"/>'
+        '<geom name="left_link" type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>'
+        '<site name="left_tool" pos="0.3 0 0"/></body>'
+        '<body name="right" pos="0 -0.3 0" quat="0 0 0 1"><joint name="r1" axis="0 1 0"/>'
+        '<geom name="right_link" type="capsule" mesh="block"/>'
+        '<site name="right_tool" pos="0.3 0 0"/></body>'
+        '<body name="marker" pos="1 0 0"><site name="marker_point"/></body>',
     ),
 }  # fmt: skip
 """Case -> (head: compiler, defaults, assets; the world's bodies)."""
@@ -199,6 +210,14 @@ def test_a_body_with_several_joints_is_a_chain(tmp_path):
     np.testing.assert_allclose(robot.q_reference, [0.0, 0.2, 0.4, 0.0])  # MuJoCo's qpos0
 
 
+def test_two_arms_need_a_fixed_base(tmp_path):
+    path = write_case(tmp_path, "two arms on the world, a primitive fitted to a mesh")
+    fitted = clik.Robot.load(path).collision_model.geometryObjects[1].geometry
+    assert isinstance(fitted, coal.Capsule) and fitted.radius > 0.005  # MuJoCo's fit
+    with pytest.raises(RobotLoadError, match="a floating base moves one root body"):
+        clik.Robot.load(path, base="floating")
+
+
 def test_a_ball_joint_is_refused_naming_its_body(tmp_path):
     body = (
         '<body name="b1"><joint name="j1" axis="0 0 1"/><geom size="0.1"/>'
@@ -291,3 +310,15 @@ def test_equality_constraints_are_named_as_not_applied(tmp_path):
     ):
         robot = clik.Robot.load(path)
     assert robot.joint_names == ["j1", "j2"]  # still two independent joints
+
+
+def test_a_site_named_like_its_body_is_its_own_frame(tmp_path):
+    body = (
+        '<body name="b1"><joint name="j1"/><geom size="0.1"/>'
+        '<body name="tip" pos="0.2 0 0"><site name="tip" pos="0.1 0 0"/></body></body>'
+    )
+    robot = clik.Robot.load(mujoco_file(tmp_path, body))
+    tip = clik.Task(robot, "tip", "position").placement(robot.q_reference).translation
+    site = clik.Task(robot, "tip_site", "position").placement(robot.q_reference).translation
+    np.testing.assert_allclose(tip, [0.2, 0.0, 0.0], atol=1e-15)  # the body keeps the name
+    np.testing.assert_allclose(site, [0.3, 0.0, 0.0], atol=1e-15)
