@@ -13,6 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 from clik.control.controller import Controller
+from clik.control.measured import MEASURED_JUMP
 from clik.errors import InputError
 from clik.tasks.com_task import ComTask
 from clik.tasks.goal import Goal
@@ -20,8 +21,11 @@ from clik.tasks.posture_task import PostureTask
 from clik.tasks.task import Task
 
 
-def controller_of(run: Any) -> Controller:
-    """The scenario run's controller: its tasks (no trajectories), law, constraints, start."""
+def controller_of(run: Any, measured_jump: float = MEASURED_JUMP) -> Controller:
+    """The scenario run's controller: its tasks (no trajectories), law, constraints, start.
+
+    ``measured_jump`` is ``c`` of eq. (M3) (``clik ros`` gives its ``[ros]`` setting).
+    """
     solver = run.scenario.solver
     goals = None
     if run.goals:
@@ -32,6 +36,7 @@ def controller_of(run: Any) -> Controller:
         law=solver["law"], gain=solver["gain"], dt=solver["dt"], damping=solver["damping"],
         constraints=tr.constraints, engine=solver["engine"], joint_speed=tr.joint_speed,
         q0=run.q0, tolerance=solver["tolerance"], settling_time=solver["settling_time"],
+        measured_jump=measured_jump,
     )  # fmt: skip
 
 

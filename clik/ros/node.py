@@ -100,7 +100,7 @@ class ClikNode:
     def __init__(self, run: Any, settings: RosSettings) -> None:
         self.ros = ros = ros_modules()
         self.settings = settings
-        self.controller = ctl = controller_of(run)
+        self.controller = ctl = controller_of(run, settings.measured_jump)
         self.robot = ctl.robot
         self.order = JointOrder.of(self.robot, "clik ros commands one value per joint")
         self.rate = settings.rate or 1.0 / ctl.dt

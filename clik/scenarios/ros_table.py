@@ -19,6 +19,10 @@ Every key is optional (docs/guides/ros.md):
   says so on the status topic; default 0.25 s.
 - ``world_frame``: the ``frame_id`` meaning the robot's world frame (also accepted:
   ``""``), default ``"world"``; any frame of the robot is accepted too.
+- ``measured_jump``: ``c`` of eq. (M3) for the node's controller, default 10 (the
+  ``Controller``'s is 3): a node on a non-real-time system runs a tick a few
+  milliseconds late now and then, and the joint state it reads then holds several
+  ticks of motion (measured: 3.1 ticks' worth at the speed limit in a CI run).
 """
 
 from __future__ import annotations
@@ -37,6 +41,10 @@ OUTPUT_TOPICS = {
 TIMEOUT = 0.25
 """Default age [s] past which a target or a joint state is stale."""
 
+MEASURED_JUMP = 10.0
+"""The node's default ``measured_jump`` (eq. (M3)): ticks of motion at the speed limits
+a joint state may hold since the last accepted one, per tick."""
+
 
 @dataclass(frozen=True)
 class RosSettings:
@@ -51,6 +59,7 @@ class RosSettings:
     obstacle_message: str = "point"
     timeout: float = TIMEOUT
     world_frame: str = "world"
+    measured_jump: float = MEASURED_JUMP
 
     def target_topic(self, task: str) -> str:
         """The target topic of task ``task``."""
@@ -86,6 +95,9 @@ def ros_table(table: Table) -> dict[str, Any]:
         "obstacle_message": table.string("obstacle_message", "point", ("point", "pose")),
         "timeout": float(table.number("timeout", TIMEOUT, minimum=0.0, strict=True, unit="[s]")),
         "world_frame": table.string("world_frame", "world"),
+        "measured_jump": float(
+            table.number("measured_jump", MEASURED_JUMP, minimum=0.0, strict=True)
+        ),
     }
     table.done()
     return values

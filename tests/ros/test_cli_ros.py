@@ -25,7 +25,8 @@ def test_without_rclpy_it_says_how_to_get_it(
 @pytest.mark.parametrize(
     ("table", "key"),
     [('output = "torque"', "ros.output"), ("timeout = -1.0", "ros.timeout"),
-     ('prefix = "clik"', "ros.prefix"), ("topic = 1", "ros")],
+     ('prefix = "clik"', "ros.prefix"), ("topic = 1", "ros"),
+     ("measured_jump = 0.0", "ros.measured_jump")],
 )  # fmt: skip
 def test_a_bad_ros_table_is_named(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], table: str, key: str
@@ -35,3 +36,15 @@ def test_a_bad_ros_table_is_named(
     scenario.write_text(CIRCLE.read_text() + f"\n[ros]\n{table}\n")
     assert main(["ros", str(scenario), "--duration", "0.1"]) == 2
     assert key in capsys.readouterr().err
+
+
+def test_the_node_s_measured_jump_is_read_from_the_ros_table() -> None:
+    """The node's (M3) bound: 10 by default (late ticks), the table's when it gives one."""
+    from clik.control.from_scenario import controller_of
+    from clik.scenarios.ros_table import MEASURED_JUMP, RosSettings
+    from clik.scenarios.runner import build
+
+    assert RosSettings().measured_jump == MEASURED_JUMP == 10.0
+    run = build(CIRCLE)
+    assert controller_of(run).measured.factor == 3.0  # the Controller's own default
+    assert controller_of(run, 7.5).measured.factor == 7.5
