@@ -24,7 +24,7 @@ models from the compiled numbers, never from its own reading of the XML:
   joint's ``ref``, zero by default) clipped into the limits.
 - **Base** (``Robot.load(..., base=...)``, :mod:`clik.model.base`): the root body's
   free joint (``<freejoint/>``) is removed from the document, and so is its pose;
-  clik places the root body itself (:func:`place_root`):
+  clik places the root body itself (:func:`root_offset`):
 
   - ``"fixed"``: welded at the pose the file gives the root body (MuJoCo's ``qpos0``),
     the free joint warned (:class:`~clik.model.mjcf_root.FreeJointWeldedWarning`),
@@ -211,37 +211,21 @@ def base_pose(document: MjcfDocument) -> pin.SE3:
     return pin.SE3(rotation, np.array([x, y, z], dtype=float))
 
 
-def place_root(model: pin.Model, document: MjcfDocument) -> None:
-    """Place the root body, whose pose the document no longer holds, in ``model``.
+def root_offset(document: MjcfDocument) -> pin.SE3:
+    """Where the root body goes after the base's root joint (the world for a fixed base).
 
-    Fixed base: nothing (:func:`~clik.model.mjcf_compiled.build_model` welds the root
-    body at :func:`root_placement`). Floating: nothing (the free-flyer's configuration
+    Fixed: :func:`root_placement`. Floating: the identity (the free-flyer's configuration
     is the root body's pose). Planar: the part of :func:`base_pose` the planar joint does
-    not carry (its height, roll and pitch: ``offset = planar(x, y, yaw)^-1 pose``) goes
-    between the root joint and the root body's frames and child joints.
+    not carry, its height, roll and pitch: ``planar(x, y, yaw)^-1 pose``.
     """
-    if document.base in (FLOATING, FIXED):
-        return
+    if document.base == FIXED:
+        return root_placement(document)
+    if document.base == FLOATING:
+        return pin.SE3.Identity()
     pose = base_pose(document)
     x, y, cos, sin = planar_from_free_flyer(np.asarray(pin.SE3ToXYZQUAT(pose)))
     yaw = np.array([[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]])
-    _attach(model, 1, pin.SE3(yaw, np.array([x, y, 0.0])).actInv(pose))
-
-
-def _attach(model: pin.Model, joint: int, placement: pin.SE3) -> None:
-    """Move what hangs on ``joint`` (child joints, frames, inertia) by ``placement``."""
-    if placement.isIdentity(1e-15):
-        return
-    for i in range(1, model.njoints):
-        if model.parents[i] == joint:
-            model.jointPlacements[i] = placement * model.jointPlacements[i]
-    for index, frame in enumerate(model.frames):
-        joint_frame = frame.type == pin.JOINT and frame.name == model.names[joint]
-        own = index == 0 if joint == 0 else joint_frame  # the world's, the root joint's frame
-        if frame.parentJoint == joint and not own:
-            frame.placement = placement * frame.placement
-    if joint > 0:
-        model.inertias[joint] = placement.act(model.inertias[joint])
+    return pin.SE3(yaw, np.array([x, y, 0.0])).actInv(pose)
 
 
 def _read(
@@ -250,9 +234,8 @@ def _read(
     """The model built from MuJoCo's compiled one (unless given) and its geometry of ``kind``."""
     compiled = compile_text(document.text, document.path, document.lines)
     if model is None:
-        model = build_model(compiled, document, root_placement(document))
+        model = build_model(compiled, document, root_offset(document))
         document.qpos0 = [float(v) for v in compiled.qpos0]
-        place_root(model, document)
     return model, build_geometry(compiled, model, kind)
 
 

@@ -83,13 +83,22 @@ def body_name(mj: Any, body: int) -> str:
     return str(mj.body(body).name) or f"body{body}"
 
 
-def joint_name(mj: Any, joint: int) -> str:
-    """A joint's name, ``<body>_joint<k>`` (its rank in its body) when it has none."""
-    name = str(mj.joint(joint).name)
-    if name:
-        return name
-    body = int(mj.jnt_bodyid[joint])
-    return f"{body_name(mj, body)}_joint{joint - int(mj.body_jntadr[body])}"
+def element_name(mj: Any, kind: str, index: int) -> str:
+    """A joint's or a geom's name; when it has none, its body's name and its rank there.
+
+    ``<body>_joint<k>`` for a joint, ``<body>Geom_<k>`` for a geom (as Pinocchio's
+    reader names geoms).
+    """
+    element = mj.joint(index) if kind == "joint" else mj.geom(index)
+    if str(element.name):
+        return str(element.name)
+    ids, first, word = (
+        (mj.jnt_bodyid, mj.body_jntadr, "_joint")
+        if kind == "joint"
+        else (mj.geom_bodyid, mj.body_geomadr, "Geom_")
+    )
+    body = int(ids[index])
+    return f"{body_name(mj, body)}{word}{index - int(first[body])}"
 
 
 def se3(position: np.ndarray, quaternion_wxyz: np.ndarray) -> pin.SE3:
@@ -104,9 +113,12 @@ def build_model(mj: Any, document: MjcfDocument, root_pose: pin.SE3) -> pin.Mode
 
     The base's root joint (``root_joint``: a planar or free-flyer joint) comes first
     when ``document.base`` is not fixed; the root body hangs on it (other bodies of the
-    world, which hold no joint and no geom, are frames welded to the world). With a
-    fixed base the root body is welded at ``root_pose`` (the pose the file gives it,
-    removed from the document: :attr:`~clik.model.mjcf_root.MjcfDocument.root_probe`).
+    world, which hold no joint and no geom, are frames welded to the world). The root
+    body is placed at ``root_pose`` after the base's root joint (or the world): for a
+    fixed base the pose the file gives it (removed from the document:
+    :attr:`~clik.model.mjcf_root.MjcfDocument.root_probe`), for a planar base what the
+    planar joint does not carry, for a floating base the identity
+    (:func:`clik.model.mjcf.root_offset`).
 
     Raises:
         RobotLoadError: A ball or free joint below the root (naming the body and joint).
@@ -120,13 +132,12 @@ def build_model(mj: Any, document: MjcfDocument, root_pose: pin.SE3) -> pin.Mode
     root_body = on_world[document.root_index]
     for body in range(1, mj.nbody):
         parent_joint, parent_frame, parent_pose = hang[int(mj.body_parentid[body])]
-        if root is not None and body == root_body:
-            parent_joint = model.addJoint(0, root, pin.SE3.Identity(), BASE_JOINT)
-            parent_frame = model.addJointFrame(parent_joint, 0)
-            parent_pose = pin.SE3.Identity()
+        if body == root_body:
+            if root is not None:
+                parent_joint = model.addJoint(0, root, pin.SE3.Identity(), BASE_JOINT)
+                parent_frame = model.addJointFrame(parent_joint, 0)
+            parent_pose = root_pose
         pose = parent_pose * se3(mj.body_pos[body], mj.body_quat[body])
-        if root is None and body == root_body:
-            pose = root_pose * pose
         hang[body] = _add_body(model, mj, document, body, (parent_joint, parent_frame, pose))
     _add_sites(model, mj, hang)
     _unique_frame_names(model)
@@ -183,7 +194,7 @@ def _add_joint(
     """One hinge or slide joint after ``at``; the body's frame after it."""
     parent, frame, pose = at
     kind = int(mj.jnt_type[j])
-    name = joint_name(mj, j)
+    name = element_name(mj, "joint", j)
     body = body_name(mj, int(mj.jnt_bodyid[j]))
     if kind not in (HINGE, SLIDE):
         what = "a ball joint" if kind == BALL else "a free joint below the root body"

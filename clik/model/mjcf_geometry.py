@@ -28,7 +28,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from clik.model.mjcf_compiled import body_name, se3
+from clik.model.mjcf_compiled import body_name, element_name, se3
 
 PLANE, SPHERE, CAPSULE, ELLIPSOID, CYLINDER, BOX, MESH = 0, 2, 3, 4, 5, 6, 7
 """MuJoCo's geom types (``mjtGeom``) clik reads (height fields are refused before)."""
@@ -62,6 +62,7 @@ def build_geometry(mj: Any, model: pin.Model, kind: pin.GeometryType) -> pin.Geo
     """
     geometry = pin.GeometryModel()
     meshes: dict[int, coal.CollisionGeometry] = {}
+    paths = _mesh_paths(mj)
     for geom in range(mj.ngeom):
         body = int(mj.geom_bodyid[geom])
         wanted = is_collision(mj, geom) if kind == pin.COLLISION else _is_visual(mj, geom)
@@ -70,9 +71,11 @@ def build_geometry(mj: Any, model: pin.Model, kind: pin.GeometryType) -> pin.Geo
         frame_id = model.getFrameId(body_name(mj, body), pin.BODY)
         frame = model.frames[frame_id]
         placement = frame.placement * se3(mj.geom_pos[geom], mj.geom_quat[geom])
-        shape, path = _shape(mj, geom, meshes, hull=kind == pin.COLLISION)
-        go = pin.GeometryObject(_geom_name(mj, geom), frame.parentJoint, frame_id, placement, shape)
-        go.meshPath = path
+        shape = _shape(mj, geom, meshes, hull=kind == pin.COLLISION)
+        go = pin.GeometryObject(
+            element_name(mj, "geom", geom), frame.parentJoint, frame_id, placement, shape
+        )
+        go.meshPath = paths[int(mj.geom_dataid[geom])] if mj.geom_type[geom] == MESH else ""
         geometry.addGeometryObject(go)
     return geometry
 
@@ -81,18 +84,10 @@ def _is_visual(mj: Any, geom: int) -> bool:
     return int(mj.geom_group[geom]) < VISUAL_GROUPS
 
 
-def _geom_name(mj: Any, geom: int) -> str:
-    name = str(mj.geom(geom).name)
-    if name:
-        return name
-    body = int(mj.geom_bodyid[geom])
-    return f"{body_name(mj, body)}Geom_{geom - int(mj.body_geomadr[body])}"
-
-
 def _shape(
     mj: Any, geom: int, meshes: dict[int, coal.CollisionGeometry], hull: bool
-) -> tuple[coal.CollisionGeometry, str]:
-    """The coal shape of a geom (sizes [m] as MuJoCo compiled them) and its mesh file.
+) -> coal.CollisionGeometry:
+    """The coal shape of a geom (sizes [m] as MuJoCo compiled them).
 
     With ``hull``, a mesh is MuJoCo's collision hull (``mesh_graph``: the convex hull
     MuJoCo collides, ``maxhullvert`` applied) when MuJoCo computed one.
@@ -100,19 +95,19 @@ def _shape(
     kind = int(mj.geom_type[geom])
     size = np.array(mj.geom_size[geom], dtype=float)
     if kind == SPHERE:
-        return coal.Sphere(size[0]), ""
+        return coal.Sphere(size[0])
     if kind == CAPSULE:
-        return coal.Capsule(size[0], 2.0 * size[1]), ""
+        return coal.Capsule(size[0], 2.0 * size[1])
     if kind == CYLINDER:
-        return coal.Cylinder(size[0], 2.0 * size[1]), ""
+        return coal.Cylinder(size[0], 2.0 * size[1])
     if kind == BOX:
-        return coal.Box(*(2.0 * size)), ""
+        return coal.Box(*(2.0 * size))
     if kind == ELLIPSOID:
-        return coal.Ellipsoid(*size), ""
+        return coal.Ellipsoid(*size)
     mesh = int(mj.geom_dataid[geom])
     if mesh not in meshes:
         meshes[mesh] = _mesh(mj, mesh, hull)
-    return meshes[mesh], _mesh_path(mj, mesh)
+    return meshes[mesh]
 
 
 def _mesh(mj: Any, mesh: int, hull: bool) -> coal.BVHModelOBBRSS:
@@ -144,16 +139,16 @@ def _mesh(mj: Any, mesh: int, hull: bool) -> coal.BVHModelOBBRSS:
     return bvh
 
 
-def _mesh_path(mj: Any, mesh: int) -> str:
-    """The mesh's file; with ``#<asset name>`` when several mesh assets read that file.
+def _mesh_paths(mj: Any) -> list[str]:
+    """Each mesh's file; with ``#<asset name>`` when several mesh assets read that file.
 
     Viewers cache a shape by this path: one file scaled two ways is two shapes.
     """
-    files = [_mesh_file(mj, m) for m in range(mj.nmesh)]
-    file = files[mesh]
-    return f"{file}#{mj.mesh(mesh).name}" if files.count(file) > 1 or not file else file
-
-
-def _mesh_file(mj: Any, mesh: int) -> str:
-    address = int(mj.mesh_pathadr[mesh])
-    return "" if address < 0 else mj.paths[address:].split(b"\0", 1)[0].decode()
+    files = []
+    for mesh in range(mj.nmesh):
+        address = int(mj.mesh_pathadr[mesh])
+        files.append("" if address < 0 else mj.paths[address:].split(b"\0", 1)[0].decode())
+    return [
+        f"{file}#{mj.mesh(m).name}" if files.count(file) > 1 or not file else file
+        for m, file in enumerate(files)
+    ]

@@ -139,7 +139,7 @@ def expand_xacro(
             XacroWarning(f"xacro, expanding {file}: {' '.join(messages.getvalue().split())}"),
             stacklevel=user_stacklevel(),
         )
-    unknown = [] if extra_args else sorted(set(args) - given.asked)
+    unknown = [] if given.extra else sorted(set(args) - given.asked)
     if unknown:
         known = ", ".join(repr(a) for a in sorted(given.asked)) or "none"
         guess = _did_you_mean(unknown, given.asked)
