@@ -1,0 +1,12 @@
+"""Point clouds as obstacles (issue 45): reading clouds and their voxel spheres.
+
+docs/method.md, "Obstacles from point clouds": :func:`~clik.clouds.read.read_cloud`
+reads an ``(N, 3)`` ``.npy``, a PLY or a PCD file within budgets;
+:func:`~clik.clouds.voxels.voxel_spheres` turns the points into the spheres (C1) the
+rows keep away from.
+"""
+
+from clik.clouds.read import MAX_CLOUD_BYTES, MAX_CLOUD_POINTS, Cloud, read_cloud
+from clik.clouds.voxels import voxel_spheres
+
+__all__ = ["MAX_CLOUD_BYTES", "MAX_CLOUD_POINTS", "Cloud", "read_cloud", "voxel_spheres"]
