@@ -1,6 +1,6 @@
 """Point clouds from files: an ``(N, 3)`` ``.npy``, a PLY file or a PCD file, within budgets.
 
-Every reader returns a :class:`Cloud`: the finite points [m] in the file's frame, and
+Every reader returns a :class:`CloudPoints`: the finite points [m] in the file's frame, and
 how many points were dropped for a NaN or an infinite coordinate (depth cameras write
 NaN where they saw nothing). A file above :data:`MAX_CLOUD_BYTES` or holding more than
 :data:`MAX_CLOUD_POINTS` points, a malformed header, or points without ``x``, ``y``,
@@ -40,7 +40,7 @@ PCD_TYPES = {
 
 
 @dataclass(frozen=True)
-class Cloud:
+class CloudPoints:
     """Points read from a file.
 
     Attributes:
@@ -54,7 +54,7 @@ class Cloud:
     source: str
 
 
-def read_cloud(path: str | Path) -> Cloud:
+def read_cloud(path: str | Path) -> CloudPoints:
     """The finite points of a ``.npy``, ``.ply`` or ``.pcd`` file.
 
     Raises:
@@ -71,10 +71,10 @@ def read_cloud(path: str | Path) -> Cloud:
     size = os.stat(path).st_size
     if size > MAX_CLOUD_BYTES:
         raise InputError(str(path), f"a file of at most {MAX_CLOUD_BYTES} bytes", size)
-    return _finite(readers[suffix](path), str(path))
+    return finite_points(readers[suffix](path), str(path))
 
 
-def _finite(xyz: np.ndarray, source: str) -> Cloud:
+def finite_points(xyz: np.ndarray, source: str) -> CloudPoints:
     """The rows without a NaN or an infinity, and how many were dropped."""
     if len(xyz) > MAX_CLOUD_POINTS:
         raise InputError(source, f"at most {MAX_CLOUD_POINTS} points", len(xyz))
@@ -82,7 +82,7 @@ def _finite(xyz: np.ndarray, source: str) -> Cloud:
     keep = np.all(np.isfinite(xyz), axis=1)
     points = np.ascontiguousarray(xyz[keep])
     points.flags.writeable = False
-    return Cloud(points, int(len(xyz) - int(keep.sum())), source)
+    return CloudPoints(points, int(len(xyz) - int(keep.sum())), source)
 
 
 def _read_npy(path: Path) -> np.ndarray:

@@ -3,7 +3,8 @@
 The points of each occupied voxel (edge ``voxel`` [m], voxels aligned on the cloud
 frame's origin) become one sphere: centre the points' centroid, radius the largest
 distance of a point to it. Every point lies in its voxel's sphere, so the clearance to
-the spheres is a lower bound of the clearance to the points (C2).
+the spheres is a lower bound of the clearance to the points (C2). The spheres come in
+the order of their voxels (x, then y, then z).
 """
 
 from __future__ import annotations
@@ -29,11 +30,15 @@ def voxel_spheres(points: np.ndarray, voxel: float) -> tuple[np.ndarray, np.ndar
     if voxel == 0.0 or len(points) == 0:
         return points.copy(), np.zeros(len(points))
     keys = np.floor(points / voxel).astype(np.int64)
-    _, owner, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
-    owner = owner.reshape(-1)
-    centres = np.zeros((len(counts), 3))
-    np.add.at(centres, owner, points)
+    keys -= keys.min(axis=0)
+    span = keys.max(axis=0) + 1
+    flat = (keys[:, 0] * span[1] + keys[:, 1]) * span[2] + keys[:, 2]
+    _, owner, counts = np.unique(flat, return_inverse=True, return_counts=True)
+    centres = np.column_stack(
+        [np.bincount(owner, weights=points[:, a], minlength=len(counts)) for a in range(3)]
+    )
     centres /= counts[:, None]
+    gaps = points - centres[owner]
     radii = np.zeros(len(counts))
-    np.maximum.at(radii, owner, np.linalg.norm(points - centres[owner], axis=1))
+    np.maximum.at(radii, owner, np.sqrt(np.einsum("ij,ij->i", gaps, gaps)))
     return centres, radii

@@ -33,7 +33,7 @@ from clik.constraints.link_pairs import LinkPairs
 from clik.constraints.obstacle import Obstacle
 from clik.constraints.obstacle_avoidance import ObstacleAvoidance
 from clik.constraints.read_only import ReadOnlyList
-from clik.errors import InputError
+from clik.errors import GeometryError, InputError
 
 if TYPE_CHECKING:
     from clik.model.robot import Robot
@@ -184,11 +184,14 @@ class ConstraintSet:
     def _build_scene(self) -> None:
         obstacles = self._obstacle_kind.obstacles
         need_scene = bool(obstacles) or self._self_collision
+        need_scene = need_scene or any(k.needs_scene for k in self.kinds)  # clouds
         self.scene = (
             CollisionScene(self.robot, obstacles, self._links, self._self_collision)
             if need_scene
             else None
         )
+        if self.scene is not None and self.scene.n_links == 0:  # clouds without link geometry
+            raise GeometryError(f"robot {self.robot.name} has no collision geometry for its clouds")
 
     @property
     def srdf_skipped_pairs(self) -> int:

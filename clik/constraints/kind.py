@@ -283,6 +283,8 @@ class ConstraintKind(ABC):
     limit_words: ClassVar[LimitWords | None] = None
     table: ClassVar[str | None] = None
     per_sample: ClassVar[tuple[str, ...]] = ()
+    needs_scene: bool = False
+    """Whether its rows measure the links' collision geometry (the set builds its scene)."""
     _gain: float | None = None
 
     @property

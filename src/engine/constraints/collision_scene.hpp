@@ -106,6 +106,12 @@ class CollisionScene {
   // Distance of collision pair `pair` at this sample's placements.
   void distance(int pair, PairDistance& out);
 
+  // Geometry g's placement at this sample (a cloud's link query).
+  const pinocchio::SE3& placement(int g) {
+    place(static_cast<pinocchio::GeomIndex>(g));
+    return gdata_.oMg[static_cast<std::size_t>(g)];
+  }
+
   const SceneConfig& config() const { return *scene_; }
 
  private:

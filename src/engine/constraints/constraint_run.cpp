@@ -314,6 +314,14 @@ std::vector<std::string> ConstraintRun::skipped_names() const {
   return {names.begin(), names.end()};
 }
 
+bool ConstraintRun::replace_cloud(const CloudConfig& cloud) {
+  bool replaced = false;
+  for (KindRun& kind : kinds_) {
+    replaced = std::visit([&](auto& k) { return k.replace_cloud(cloud); }, kind) || replaced;
+  }
+  return replaced;
+}
+
 bool ConstraintRun::move_obstacle(const std::string& name, const Vec3& position,
                                   const Vec3& velocity, const Mat3& rotation, double tk) {
   bool moved = false;

@@ -87,6 +87,8 @@ class ConstraintRun {
 
   // An obstacle moved by a controller: at `position` at time tk [s], then `velocity`
   // (every kind is asked; the one that has it moves it). False: no obstacle so named.
+  // A cloud replaced by a controller, in the kind that has it; false: none so named.
+  bool replace_cloud(const CloudConfig& cloud);
   bool move_obstacle(const std::string& name, const Vec3& position, const Vec3& velocity,
                      const Mat3& rotation, double tk);
 

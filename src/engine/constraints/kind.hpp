@@ -144,6 +144,8 @@ struct RecordArray {
   bool as_list = false;     // a list of ints (1-D, i32)
 };
 
+struct CloudConfig;  // constraints/cloud_query.hpp
+
 // The optional parts of a kind, doing nothing: a kind derives from it and hides
 // (same name, same signature) what it has.
 struct KindDefaults {
@@ -152,6 +154,8 @@ struct KindDefaults {
   bool move_obstacle(const std::string&, const Vec3&, const Vec3&, const Mat3&, double) {
     return false;
   }
+  // A cloud replaced by a controller (named): whether this kind has it (the cloud kind does).
+  bool replace_cloud(const CloudConfig&) { return false; }
   void observe_limits(double, ViolationMonitor&, const std::vector<std::string>&) const {}
   void record(int) {}
   double min_distance() const { return INF; }

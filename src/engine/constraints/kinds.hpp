@@ -9,6 +9,7 @@
 
 #include <variant>
 
+#include "constraints/cloud_avoidance.hpp"
 #include "constraints/cone.hpp"
 #include "constraints/dexterity.hpp"
 #include "constraints/joint_limits.hpp"
@@ -19,7 +20,7 @@
 namespace clik {
 
 using KindConfig = std::variant<JointRangeConfig, ObstacleRowsConfig, LinkPairsConfig,
-                                DexterityConfig, WorkspaceConfig, ConeConfig>;
+                                DexterityConfig, WorkspaceConfig, ConeConfig, CloudRowsConfig>;
 
 namespace detail {
 template <typename Configs>

@@ -324,6 +324,15 @@ void bind_session(nb::class_<PyTrackingRun>& run) {
           nb::arg("name"), nb::arg("position"), nb::arg("velocity"), nb::arg("rotation"),
           "Obstacle `name` at `position` [m] at the next sample's time, moving with "
           "`velocity` [m/s] from then on, rotated by `rotation` (3, 3).")
+      .def(
+          "replace_cloud",
+          [](PyTrackingRun& s, const CloudConfig& cloud) {
+            if (!s.constraints || !s.constraints->replace_cloud(cloud)) {
+              throw std::invalid_argument("replace_cloud: no cloud named '" + cloud.name + "'");
+            }
+          },
+          nb::arg("cloud"),
+          "Cloud `cloud.name` replaced by `cloud` (a checked CloudConfig) from the next sample.")
       .def_prop_ro("active_names",
                    [](const PyTrackingRun& s) {
                      return s.constraints ? s.constraints->active_names()

@@ -1,0 +1,135 @@
+// A cloud's grid and a link's nearest sphere: see cloud_query.hpp.
+#include "constraints/cloud_query.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <coal/distance.h>
+
+namespace clik {
+
+namespace {
+
+constexpr long long MAX_CELLS = 1LL << 26;
+
+[[noreturn]] void refuse(const std::string& cloud, const std::string& what) {
+  throw std::invalid_argument("CloudConfig " + cloud + ": " + what);
+}
+
+}  // namespace
+
+void CloudConfig::check() {
+  const auto k = static_cast<Eigen::Index>(radii.size());
+  if (name.empty()) refuse(name, "a name");
+  if (centres.rows() != k || order.size() != k) refuse(name, "K centres (K, 3), K radii, K order");
+  if (!centres.allFinite() || !radii.allFinite() || (k > 0 && radii.minCoeff() < 0.0)) {
+    refuse(name, "finite centres [m] and finite radii >= 0 [m]");
+  }
+  if (!(std::isfinite(cell) && cell > 0.0) || !low.allFinite()) {
+    refuse(name, "a positive grid cell [m] and a finite lowest corner");
+  }
+  if (!(std::isfinite(threshold) && threshold > 0.0)) refuse(name, "a positive threshold [m]");
+  if (dims.minCoeff() < 1) refuse(name, "at least one cell along each axis");
+  const long long cells = static_cast<long long>(dims[0]) * dims[1] * dims[2];
+  if (cells > MAX_CELLS) refuse(name, "at most 2^26 grid cells");
+  if (start.size() != cells + 1 || start[0] != 0 || start[cells] != k) {
+    refuse(name, "start: cells + 1 offsets from 0 to K");
+  }
+  std::vector<char> seen(static_cast<std::size_t>(k), 0);
+  for (long long c = 0; c < cells; ++c) {
+    if (start[c + 1] < start[c]) refuse(name, "start: offsets that never decrease");
+    const long long z = c % dims[2], y = (c / dims[2]) % dims[1], x = c / (dims[2] * dims[1]);
+    for (int p = start[c]; p < start[c + 1]; ++p) {
+      const int s = order[p];
+      if (s < 0 || s >= k || seen[static_cast<std::size_t>(s)]) {
+        refuse(name, "order: each sphere's index once");
+      }
+      seen[static_cast<std::size_t>(s)] = 1;
+      for (int a = 0; a < 3; ++a) {  // the sphere's cell, as sphere_grid computes it
+        const double f = std::floor((centres(s, a) - low[a]) / cell);
+        const long long at = std::min(static_cast<long long>(std::max(f, 0.0)),
+                                      static_cast<long long>(dims[a]) - 1);
+        if (f < 0.0 || at != (a == 0 ? x : a == 1 ? y : z)) {
+          refuse(name, "order: every sphere in the cell of its centre");
+        }
+      }
+    }
+  }
+  largest = k > 0 ? radii.maxCoeff() : 0.0;
+}
+
+CloudQuery::CloudQuery() {
+  request_.enable_signed_distance = true;
+  request_.gjk_tolerance = CLOUD_GJK_TOLERANCE;
+  request_.epa_tolerance = CLOUD_GJK_TOLERANCE;
+}
+
+void CloudQuery::reserve(int spheres) {
+  hits_.reserve(static_cast<std::size_t>(std::max(spheres, 0)));
+}
+
+bool CloudQuery::nearest(const CloudConfig& cloud, const coal::CollisionGeometry& shape,
+                         const LocalBox& box, const pinocchio::SE3& placement, double reach,
+                         NearestSphere& out) {
+  out = NearestSphere{};
+  if (cloud.size() == 0) return false;
+  const Mat3& R = placement.rotation();
+  const Vec3& t = placement.translation();
+  const Vec3 centre = R * (0.5 * (box.lo + box.hi)) + t;
+  const Vec3 half = R.cwiseAbs() * (0.5 * (box.hi - box.lo)) + Vec3::Constant(reach + cloud.largest);
+  long long a[3], b[3];
+  for (int k = 0; k < 3; ++k) {
+    const double fa = std::floor((centre[k] - half[k] - cloud.low[k]) / cloud.cell);
+    const double fb = std::floor((centre[k] + half[k] - cloud.low[k]) / cloud.cell);
+    if (fb < 0.0 || fa >= cloud.dims[k]) return false;
+    a[k] = static_cast<long long>(std::max(fa, 0.0));
+    b[k] = std::min(static_cast<long long>(fb), static_cast<long long>(cloud.dims[k]) - 1);
+  }
+  hits_.clear();
+  const long long ny = cloud.dims[1], nz = cloud.dims[2];
+  for (long long x = a[0]; x <= b[0]; ++x) {
+    for (long long y = a[1]; y <= b[1]; ++y) {
+      const long long column = (x * ny + y) * nz;
+      for (int p = cloud.start[column + a[2]]; p < cloud.start[column + b[2] + 1]; ++p) {
+        const int s = cloud.order[p];
+        const Vec3 local = R.transpose() * (cloud.centres.row(s).transpose() - t);
+        const Vec3 outside = (box.lo - local).cwiseMax(local - box.hi).cwiseMax(0.0);
+        const double gap = std::sqrt(outside.dot(outside));
+        const double lower = gap > 0.0 ? gap - cloud.radii[s] : -INF;
+        if (lower < reach) hits_.push_back({lower, static_cast<int>(hits_.size()), s});
+      }
+    }
+  }
+  std::sort(hits_.begin(), hits_.end(), [](const Hit& u, const Hit& v) {
+    return u.lower < v.lower || (u.lower == v.lower && u.position < v.position);
+  });
+  const coal::Transform3s tf(R, t);
+  NearestSphere found;
+  for (const Hit& h : hits_) {
+    if (h.lower >= std::min(out.distance, reach)) break;  // none left nearer, nor in reach
+    sphere_distance(shape, tf, cloud.centres.row(h.sphere).transpose(), cloud.radii[h.sphere],
+                    found);
+    if (found.distance < out.distance) {
+      out = found;
+      out.sphere = h.sphere;
+    }
+  }
+  return out.distance < reach;
+}
+
+void CloudQuery::sphere_distance(const coal::CollisionGeometry& shape,
+                                 const coal::Transform3s& tf, const Vec3& centre,
+                                 double radius, NearestSphere& out) {
+  const double ball = std::max(radius, POINT_RADIUS);
+  ball_.radius = ball;
+  result_.clear();
+  coal::distance(&shape, tf, &ball_, coal::Transform3s(Mat3::Identity(), centre), request_,
+                 result_);
+  out.distance = result_.min_distance + (ball - radius);
+  out.on_link = result_.nearest_points[0];
+  out.on_cloud = result_.nearest_points[1];
+  out.normal = result_.normal;
+}
+
+}  // namespace clik
