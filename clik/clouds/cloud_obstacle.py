@@ -55,8 +55,8 @@ class CloudObstacle:
         name: str,
         points: np.ndarray | Sequence[Sequence[float]],
         voxel: float = DEFAULT_VOXEL,
-        position: Sequence[float] = (0.0, 0.0, 0.0),
-        rpy: Sequence[float] = (0.0, 0.0, 0.0),
+        position: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0),
+        rpy: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0),
         threshold: float | None = None,
         source: str = "",
     ) -> None:

@@ -51,7 +51,7 @@ def grid_cell(centres: np.ndarray, radii: np.ndarray, threshold: float) -> float
     """The cell [m]: the threshold plus a sphere's diameter, or wider for a wide cloud."""
     extent = float(np.ptp(centres, axis=0).max()) if len(centres) else 0.0
     largest = float(radii.max()) if len(radii) else 0.0
-    return max(threshold + 2.0 * largest, extent / MAX_GRID_SPAN, MIN_CELL)
+    return max(2.0 * largest, extent / MAX_GRID_SPAN, MIN_CELL)
 
 
 def sphere_grid(centres: np.ndarray, radii: np.ndarray, cell: float) -> SphereGrid:

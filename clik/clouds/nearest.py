@@ -1,17 +1,22 @@
 """A link's nearest voxel sphere within a reach, fast when none is: docs/method.md (C1)-(C2).
 
 The link is a convex coal shape in its own axis-aligned box ``[lo, hi]`` (its frame).
-Only spheres in the grid cells met by the link's world box grown by ``reach`` and the
-largest radius can be within ``reach``; when those cells are empty coal is not asked.
+Only spheres in the grid cells met by the link's world box grown by ``reach`` (or the
+distance of a hinted sphere, the pair's last nearest, asked first) and the largest
+radius can be nearer; when those cells are empty coal is not asked.
 Otherwise each candidate's distance has the lower bound ``|c_k - b(c_k)| - r_k``
 (``b(c)`` the nearest point of the link's box to ``c``; none for a centre inside the
 box), and coal is asked (the link against one sphere) in the order of that bound until
-it reaches the best distance found or ``reach``. The compiled engine's
+it reaches the best distance found or ``reach``. Each answer with the centre outside
+the link gives a separating plane (through the link's nearest point, normal to it): a
+sphere that a plane met so far keeps as far as the best is not asked (on a flat table
+under a flat link the box bound ties for every sphere below; the planes do not). The compiled engine's
 ``src/engine/constraints/cloud_query.cpp`` does the same, step for step.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import coal
@@ -21,6 +26,9 @@ from clik.clouds.grid import SphereGrid, cells_of_box
 
 GJK_TOLERANCE = 1e-9
 """coal's GJK/EPA tolerance of a link-sphere distance [m] (as the collision scene's)."""
+
+MAX_PLANES = 4
+"""Separating planes a query keeps (the latest) to skip spheres they keep far."""
 
 POINT_RADIUS = 1e-9
 """The radius [m] coal is given for a sphere of radius 0 (a point); its distance is
@@ -59,6 +67,7 @@ def nearest_sphere(
     box: tuple[np.ndarray, np.ndarray],
     placement: coal.Transform3s,
     reach: float,
+    hint: int = -1,
 ) -> Nearest | None:
     """The link's nearest sphere if nearer than ``reach`` [m], else None.
 
@@ -68,31 +77,69 @@ def nearest_sphere(
         box: Its local box (:func:`local_box`).
         placement: Its pose in the world.
         reach: How far to look [m] (the threshold plus a search margin).
+        hint: A sphere likely to be the nearest (the last one found), asked first: its
+            distance narrows the cells searched; -1: none.
     """
+    best: Nearest | None = None
+    planes = np.zeros((0, 4))  # separating planes met so far: the link in n . x <= offset
+    if 0 <= hint < len(grid.radii):
+        best = sphere_distance(shape, placement, grid.centres[hint], float(grid.radii[hint]), hint)
+        planes = _with_plane(planes, grid.centres[hint], best)
+    bar = reach if best is None else min(best.distance, reach)
     rotation = np.asarray(placement.getRotation())
     translation = np.asarray(placement.getTranslation())
     lo, hi = box
     centre = rotation @ (0.5 * (lo + hi)) + translation
-    half = np.abs(rotation) @ (0.5 * (hi - lo)) + (reach + grid.largest)
+    half = np.abs(rotation) @ (0.5 * (hi - lo)) + (bar + grid.largest)
     candidates = cells_of_box(grid, centre - half, centre + half)
-    if len(candidates) == 0:
-        return None
+    candidates = candidates[candidates != hint]
     local = (grid.centres[candidates] - translation) @ rotation
     outside = np.maximum(np.maximum(lo - local, local - hi), 0.0)
     gaps = np.sqrt(np.einsum("ij,ij->i", outside, outside))
     # a centre inside the box may be deep inside the link: no bound on its signed distance
     lower = np.where(gaps > 0.0, gaps - grid.radii[candidates], -np.inf)
-    keep = lower < reach
+    keep = lower < bar
     candidates, lower = candidates[keep], lower[keep]
-    best: Nearest | None = None
     for i in np.argsort(lower, kind="stable"):
-        if lower[i] >= (reach if best is None else min(best.distance, reach)):
+        bar = reach if best is None else min(best.distance, reach)
+        if lower[i] >= bar:
             break  # no sphere left can be nearer, nor within reach
         k = int(candidates[i])
-        found = sphere_distance(shape, placement, grid.centres[k], float(grid.radii[k]), k)
+        centre, radius = grid.centres[k], float(grid.radii[k])
+        if len(planes) and plane_bound(planes, centre) - radius >= bar:
+            continue  # a plane met before keeps it at least that far
+        found = sphere_distance(shape, placement, centre, radius, k)
         if best is None or found.distance < best.distance:
             best = found
+        planes = _with_plane(planes, centre, found)
     return best if best is not None and best.distance < reach else None
+
+
+def _with_plane(planes: np.ndarray, centre: np.ndarray, found: Nearest) -> np.ndarray:
+    """The latest :data:`MAX_PLANES` planes, with the one ``found`` gives if any."""
+    plane = separating_plane(centre, found)
+    return planes if plane is None else np.vstack([planes[-(MAX_PLANES - 1) :], plane])
+
+
+def separating_plane(centre: np.ndarray, found: Nearest) -> np.ndarray | None:
+    """``(n, offset)``: the plane through the link's nearest point to ``centre``, normal to it.
+
+    The link (convex) lies in ``n . x <= offset`` when the centre is outside it; None
+    when it is not (a sphere whose centre is inside the link gives no plane).
+    """
+    gap = centre - found.on_link
+    norm = math.sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2])
+    if not found.distance > 0.0 or norm <= 0.0:
+        return None
+    n = gap / norm
+    offset = n[0] * found.on_link[0] + n[1] * found.on_link[1] + n[2] * found.on_link[2]
+    return np.array([n[0], n[1], n[2], offset])
+
+
+def plane_bound(planes: np.ndarray, centre: np.ndarray) -> float:
+    """A lower bound of the distance from ``centre`` to the link: its largest plane gap [m]."""
+    gaps = planes[:, 0] * centre[0] + planes[:, 1] * centre[1] + planes[:, 2] * centre[2]
+    return float((gaps - planes[:, 3]).max())
 
 
 def sphere_distance(
@@ -102,7 +149,7 @@ def sphere_distance(
     radius: float,
     sphere: int = -1,
 ) -> Nearest:
-    """coal's signed distance from a convex shape to a sphere, and the witness points."""
+    """Coal's signed distance from a convex shape to a sphere, and the witness points."""
     request, result = coal.DistanceRequest(), coal.DistanceResult()
     request.enable_signed_distance = True
     request.gjk_tolerance = request.epa_tolerance = GJK_TOLERANCE

@@ -34,10 +34,8 @@ def voxel_spheres(points: np.ndarray, voxel: float) -> tuple[np.ndarray, np.ndar
     span = keys.max(axis=0) + 1
     flat = (keys[:, 0] * span[1] + keys[:, 1]) * span[2] + keys[:, 2]
     _, owner, counts = np.unique(flat, return_inverse=True, return_counts=True)
-    centres = np.column_stack(
-        [np.bincount(owner, weights=points[:, a], minlength=len(counts)) for a in range(3)]
-    )
-    centres /= counts[:, None]
+    sums = [np.bincount(owner, weights=points[:, a], minlength=len(counts)) for a in range(3)]
+    centres: np.ndarray = np.column_stack(sums) / counts[:, None]
     gaps = points - centres[owner]
     radii = np.zeros(len(counts))
     np.maximum.at(radii, owner, np.sqrt(np.einsum("ij,ij->i", gaps, gaps)))

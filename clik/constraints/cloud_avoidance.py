@@ -142,13 +142,20 @@ class CloudAvoidance(ConstraintKind):
     def finish(
         self, result: TrackingResult, records: dict[str, Any], n_rec: int, extra: dict[str, Any]
     ) -> None:
-        """Distances per cloud: the record's columns, the summary's minima (with the obstacles')."""
+        """Distances per cloud: the record's columns, the summary's minima (with the obstacles').
+
+        Also the points a view draws (:mod:`clik.clouds.drawn`): ``extra["cloud_points"]``
+        and ``extra["cloud_points_index"]``.
+        """
+        from clik.clouds.drawn import drawn_clouds
+
         result.info["clouds"] = [
             {**c.info(), "threshold": float(t), "spheres": len(g.radii)}
             for c, g, t in zip(self.clouds, self.grids(), self.thresholds, strict=True)
         ]
         if not self.clouds:
             return
+        result.extra["cloud_points"], result.extra["cloud_points_index"] = drawn_clouds(self.clouds)
         result.extra["cloud_distance"] = records["cloud_distance"][:n_rec]
         result.extra["cloud_link"] = records["cloud_link"][:n_rec]
         run_min, labels = np.asarray(records["run_min"]), result.info["links"]
@@ -201,7 +208,8 @@ class CloudAvoidance(ConstraintKind):
 
     def fingerprint(self) -> tuple[Any, ...]:
         """The clouds (by identity), thresholds, rows, gain."""
-        clouds = tuple((c.name, id(c), float(t)) for c, t in zip(self.clouds, self.thresholds))
+        pairs = zip(self.clouds, self.thresholds, strict=True)
+        clouds = tuple((c.name, id(c), float(t)) for c, t in pairs)
         return (clouds, self.threshold, self.rows, self.gain)
 
 
@@ -256,11 +264,12 @@ class CloudRun(KindRun):
         self._local = pin.SE3.Identity()
         self._lb = np.full((n_links, n_c), -np.inf)  # unknown at the start
         self._found = np.zeros((n_links, n_c), dtype=bool)  # lb exact when evaluated
+        self._hint = np.full((n_links, n_c), -1)  # each pair's last nearest sphere
         self._pairs: dict[int, tuple[Nearest, int]] = {}
         if self.scene is None or not n_c:
             return
         scene = self.scene
-        self.names = [[f"cloud:{c.name}:{label}" for c in kind.clouds] for label in scene.link_labels]
+        self.names = [[f"cloud:{c.name}:{link}" for c in kind.clouds] for link in scene.link_labels]
         self.rho = scene.motion_bounds()
         self.shapes = [scene.gmodel.geometryObjects[i].geometry for i in range(n_links)]
         self.boxes = [local_box(shape) for shape in self.shapes]
@@ -307,11 +316,14 @@ class CloudRun(KindRun):
         s.place_geometries()
         M = self.geometry.gdata.oMg[i]
         reach = float(self.reach[c])
-        found = nearest_sphere(self.grids[c], self.shapes[i], self.boxes[i], _tf(M), reach)
+        grid, hint = self.grids[c], int(self._hint[i, c])
+        found = nearest_sphere(grid, self.shapes[i], self.boxes[i], _tf(M), reach, hint)
         self._found[i, c] = found is not None
         if found is None:
             self._lb[i, c] = reach
+            self._hint[i, c] = -1
             return None
+        self._hint[i, c] = found.sphere
         self._lb[i, c] = found.distance
         thr = float(self.kind.thresholds[c])
         item = i * self.n_c + c
@@ -341,6 +353,7 @@ class CloudRun(KindRun):
         self.kind = self.kind.replaced_cloud(cloud)
         self.grids[c] = self.kind.grids()[c]
         self._lb[:, c] = -np.inf
+        self._hint[:, c] = -1
         self._replaced[c] = True
         return True
 

@@ -37,6 +37,7 @@ from clik.outputs.ring import unrolled
 from clik.tasks.extended_task import ExtendedTask
 
 if TYPE_CHECKING:
+    from clik.clouds.cloud_obstacle import CloudObstacle
     from clik.constraints.constraint_set import ConstraintSet
     from clik.constraints.obstacle import Obstacle
     from clik.constraints.violations import ViolationMonitor
@@ -255,6 +256,10 @@ class ConstraintRun:
         """Every limit the kinds guard that is crossed at this sample, to ``monitor``."""
         for run in self.runs:
             run.observe_limits(tk, monitor)
+
+    def replace_cloud(self, cloud: CloudObstacle) -> bool:
+        """A cloud replaced by a controller, in the kind that has it; False: none so named."""
+        return any([run.replace_cloud(cloud) for run in self.runs])
 
     def move_obstacle(self, obstacle: Obstacle) -> bool:
         """An obstacle moved by a controller (from ``t = 0``), in every kind that has it.

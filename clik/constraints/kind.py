@@ -44,6 +44,7 @@ from clik.schema import MAX_GAIN_DT, Table
 if TYPE_CHECKING:
     import pinocchio as pin
 
+    from clik.clouds.cloud_obstacle import CloudObstacle
     from clik.constraints.collision_scene import CollisionScene, SceneRun
     from clik.constraints.obstacle import Obstacle
     from clik.constraints.violations import ViolationMonitor
@@ -240,6 +241,10 @@ class KindRun(ABC):
 
         The obstacle kind moves it; the others have no obstacles.
         """
+        return False
+
+    def replace_cloud(self, cloud: CloudObstacle) -> bool:
+        """A cloud replaced by a controller: whether this kind has it (the cloud kind)."""
         return False
 
     def observe_limits(self, tk: float, monitor: ViolationMonitor) -> None:  # noqa: B027

@@ -14,6 +14,7 @@ found here by the key's prefix (:func:`kind_of`), not by a list of kinds elsewhe
 
 from __future__ import annotations
 
+from clik.constraints.cloud_avoidance import CloudAvoidance
 from clik.constraints.cone import Cone
 from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits
@@ -32,6 +33,7 @@ KINDS: tuple[type[ConstraintKind], ...] = (
     LinkPairs,
     Dexterity,
     *TABLE_KINDS,
+    CloudAvoidance,
 )
 """Every kind, in the order a :class:`~clik.constraints.ConstraintSet` evaluates them."""
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from clik.constraints.constraint_set import ConstraintSet
-from clik.constraints.obstacle import Obstacle
+from clik.control.cloud_updates import cloud_names, new_cloud
 from clik.control.measured import MEASURED_JUMP, MEASUREMENT_JUMP, MeasuredJoints
 from clik.control.targets import as_floats, as_mapping
 from clik.control.tick import Tick
@@ -158,7 +158,7 @@ class Controller:
             )  # fmt: skip
         self._tick = self._ticks.step  # step's call (bound once: it runs at every tick)
         self._session: Session
-        self._current: dict[str, Obstacle] = {}  # the obstacles moved in this session
+        self._current: dict[str, Any] = {}  # the obstacles moved, clouds replaced in this session
         self.reset(q0)
 
     @contextmanager
@@ -233,6 +233,27 @@ class Controller:
         with self._held("Controller.move_obstacle"):
             self._move_one(name, position, rpy, velocity)
 
+    def update_cloud(self, name: str, points: Any, robot_padding: float | None = None) -> None:
+        """Cloud ``name`` given new points from the next tick on (as ``step(obstacles=)``).
+
+        Args:
+            name: The cloud's name.
+            points: ``(N, 3)`` points [m] in the cloud's frame; NaN or infinite rows dropped.
+            robot_padding: Also remove the points within this margin [m] of the robot at
+                the controller's joints (a camera that sees the arm); None: keep them all.
+
+        Raises:
+            InputError: No cloud so named, points not ``(N, 3)`` numbers.
+        """
+        with self._held("Controller.update_cloud"):
+            self._replace_cloud(name, points, robot_padding)
+
+    def _replace_cloud(self, name: str, points: Any, robot_padding: float | None) -> None:
+        """:meth:`update_cloud`, the turn held."""
+        cset, q = self._session.run.cset, self.q
+        cloud, threshold = new_cloud(cset, self._current, name, points, q, robot_padding)
+        self._session.replace_cloud(cloud, threshold)
+
     def _move_one(self, name: str, position: Any, rpy: Any, velocity: Any) -> None:
         """:meth:`move_obstacle`, the turn held."""
         cset = self._session.run.cset
@@ -271,7 +292,8 @@ class Controller:
                 target stays where it was at the previous tick.
             obstacles: Obstacles that moved, by name: a position (3,) [m] (then at rest)
                 or ``(position, velocity)`` [m, m/s]; as :meth:`move_obstacle`, from this
-                tick on.
+                tick on. A cloud's new points: an ``(N, 3)`` array [m] in its frame
+                (:meth:`update_cloud`).
             q_measured: The joints the robot reached (nq,) [rad or m], read at this tick:
                 the law runs from them (eq. (M1)) and the commanded joints integrate its
                 velocity, ``q = q_k (+) qdot dt`` (M2); unless they moved further than
@@ -306,7 +328,11 @@ class Controller:
                 "a mapping of obstacle name to position or (position, velocity)",
                 obstacles,
             )
+        clouds = cloud_names(self._session.run.cset)
         for name, value in obstacles.items():
+            if name in clouds:
+                self._replace_cloud(name, value, None)
+                continue
             pair = isinstance(value, tuple) and len(value) == 2
             position, velocity = value if pair else (value, None)
             self._move_one(name, position, None, velocity)

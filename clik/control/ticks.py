@@ -18,14 +18,17 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clik.constraints.cloud_avoidance import cloud_config
 from clik.constraints.registry import limit_words
 from clik.constraints.violations import ViolationRecord
 from clik.control.measured import MEASUREMENT_JUMP, JumpFound, MeasuredJoints
 from clik.control.targets import TickTargets
 from clik.control.tick import Tick
+from clik.engine import load
 from clik.loop.compiled_run import CompiledConstraints, stopped, synced
 
 if TYPE_CHECKING:
+    from clik.clouds.cloud_obstacle import CloudObstacle
     from clik.constraints.obstacle import Obstacle
     from clik.loop.tracking import _Run
 
@@ -90,6 +93,15 @@ class Session:
             return
         assert self.run.crun is not None
         self.run.crun.move_obstacle(obstacle.moved(position - tk * obstacle.velocity))
+
+    def replace_cloud(self, cloud: CloudObstacle, threshold: float) -> None:
+        """Cloud ``cloud.name`` replaced by ``cloud`` (threshold [m]) from the next tick."""
+        if self.native is not None:
+            config = cloud_config(load(), cloud.name, cloud.spheres(threshold), threshold)
+            self.native.replace_cloud(config)
+            return
+        assert self.run.crun is not None
+        self.run.crun.replace_cloud(cloud)
 
     def sync(self) -> None:
         """The engine's state into the run (before its result is made)."""

@@ -23,6 +23,7 @@ import pytest
 
 import clik
 from clik.constraints import ConstraintRun, Dexterity, JointLimits, LinkPairs, ObstacleAvoidance
+from clik.constraints.cloud_avoidance import CloudAvoidance
 from clik.constraints.cone import Cone
 from clik.constraints.kind import ConstraintKind, KindRun
 from clik.constraints.pose_check import PoseCheck
@@ -225,6 +226,7 @@ DEPTH_WORDS = {
     Dexterity: "{:.4g}",
     Workspace: "{:.3g} mm",
     Cone: "{:.4g}",
+    CloudAvoidance: "{:.3g} mm",
 }
 """How a recovery clause writes each kind's depth: lengths in mm, the others as they are."""
 

@@ -37,6 +37,8 @@ from clik.constraints import (
     Obstacle,
     ObstacleAvoidance,
 )
+from clik.clouds import CloudObstacle
+from clik.constraints.cloud_avoidance import CloudAvoidance
 from clik.constraints.cone import Cone
 from clik.constraints.kind import Sample
 from clik.constraints.registry import KINDS
@@ -183,6 +185,22 @@ def cone_case() -> Case:
     return Case(cset, tip_task(r), Q.copy(), np.array([0.1, -0.1, 0.0]), "cone", satisfied)
 
 
+def cloud_case() -> Case:
+    r = robot()
+    centre = sphere_centres(r, Q)[2] + np.array([0.0, 0.14, 0.0])
+    rng = np.random.default_rng(4)
+    points = rng.normal(size=(300, 3))
+    points = centre + SPHERE * points / np.linalg.norm(points, axis=1)[:, None]  # a ball's skin
+    cloud = CloudObstacle("scan", points, voxel=0.0)
+
+    def satisfied(x: np.ndarray) -> bool:
+        gaps = [np.linalg.norm(points - c, axis=1).min() - SPHERE for c in sphere_centres(r, x)]
+        return min(gaps) >= 0.08 - CHECK
+
+    cset = ConstraintSet(r, kinds=[CloudAvoidance([cloud], threshold=0.08)])
+    return Case(cset, tip_task(r), Q.copy(), np.array([0.0, 0.15, 0.0]), "cloud", satisfied)
+
+
 CASES: dict[type, Callable[[], Case]] = {
     JointLimits: joint_case,
     ObstacleAvoidance: obstacle_case,
@@ -190,6 +208,7 @@ CASES: dict[type, Callable[[], Case]] = {
     Dexterity: dexterity_case,
     Workspace: workspace_case,
     Cone: cone_case,
+    CloudAvoidance: cloud_case,
 }
 
 KIND_IDS = [k.__name__ for k in KINDS]
@@ -199,7 +218,7 @@ def test_every_kind_has_a_case():
     assert set(KINDS) == set(CASES), (
         "a registered kind needs a case in tests/constraints/test_kinds.py"
     )
-    assert len(KINDS) == 6
+    assert len(KINDS) == 7
 
 
 def kind_run(case: Case, kind_type: type, q: np.ndarray):
@@ -338,6 +357,9 @@ BAD_INPUT = [
     (Workspace, lambda r: Workspace(r, "tip", [0, 0], [1, 1, 1]), "constraints.workspace.lower"),
     (Cone, lambda r: Cone(r, "tip", [0, 0, 0], [0, 0, 1], 0.5), "constraints.cone.axis"),
     (Cone, lambda r: Cone(r, "tip", [0, 0, 1], [0, 0, 1], 0.0), "constraints.cone.angle"),
+    (CloudAvoidance, lambda r: CloudAvoidance([np.zeros((3, 3))]), "clouds[0]"),
+    (CloudAvoidance, lambda r: CloudObstacle("scan", np.zeros((4, 2))), "obstacles.scan.points"),
+    (CloudAvoidance, lambda r: CloudObstacle("scan", np.zeros((4, 3)), -0.1), "obstacles.scan.voxel"),
     (
         Cone,
         lambda r: Cone(r, "tip", [0, 0, 1], [0, 0, 1], 0.2, threshold=0.2),

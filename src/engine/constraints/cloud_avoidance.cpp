@@ -133,10 +133,13 @@ bool CloudRows::evaluate_pair(Sample& s, int i, int c, Candidate& out) {
   const pinocchio::SE3& placement = s.scene.placed().placement(i);
   const coal::CollisionGeometry& shape = *scene_->gmodel->geometryObjects[i].geometry;
   NearestSphere& found = nearest_[pair];
-  const bool near = query_.nearest(cfg_.clouds[c], shape, boxes_[i], placement, reach_[c], found);
+  const int hint = found.sphere;  // the last evaluation's sphere (-1: none)
+  const bool near =
+      query_.nearest(cfg_.clouds[c], shape, boxes_[i], placement, reach_[c], hint, found);
   found_[pair] = near;
   if (!near) {
     lb_(i, c) = reach_[c];
+    found.sphere = -1;
     return false;
   }
   lb_(i, c) = found.distance;
@@ -175,6 +178,7 @@ bool CloudRows::replace_cloud(const CloudConfig& cloud) {
     query_.reserve(cloud.size());
     reach_[c] = cloud.threshold + cfg_.search_margin;
     lb_.col(c).setConstant(-INF);
+    for (int i = 0; i < n_links_; ++i) nearest_[static_cast<std::size_t>(i) * n_c_ + c].sphere = -1;
     replaced_[static_cast<std::size_t>(c)] = 1;
     return true;
   }

@@ -71,13 +71,23 @@ void CloudQuery::reserve(int spheres) {
 
 bool CloudQuery::nearest(const CloudConfig& cloud, const coal::CollisionGeometry& shape,
                          const LocalBox& box, const pinocchio::SE3& placement, double reach,
-                         NearestSphere& out) {
+                         int hint, NearestSphere& out) {
   out = NearestSphere{};
   if (cloud.size() == 0) return false;
   const Mat3& R = placement.rotation();
   const Vec3& t = placement.translation();
+  const coal::Transform3s tf(R, t);
+  n_planes_ = next_plane_ = 0;
+  if (hint >= 0 && hint < cloud.size()) {  // the pair's last nearest sphere, asked first
+    const Vec3 c = cloud.centres.row(hint).transpose();
+    sphere_distance(shape, tf, c, cloud.radii[hint], out);
+    out.sphere = hint;
+    add_plane(c, out);
+  }
+  const double first_bar = std::min(out.distance, reach);
   const Vec3 centre = R * (0.5 * (box.lo + box.hi)) + t;
-  const Vec3 half = R.cwiseAbs() * (0.5 * (box.hi - box.lo)) + Vec3::Constant(reach + cloud.largest);
+  const Vec3 half =
+      R.cwiseAbs() * (0.5 * (box.hi - box.lo)) + Vec3::Constant(first_bar + cloud.largest);
   long long a[3], b[3];
   for (int k = 0; k < 3; ++k) {
     const double fa = std::floor((centre[k] - half[k] - cloud.low[k]) / cloud.cell);
@@ -93,29 +103,56 @@ bool CloudQuery::nearest(const CloudConfig& cloud, const coal::CollisionGeometry
       const long long column = (x * ny + y) * nz;
       for (int p = cloud.start[column + a[2]]; p < cloud.start[column + b[2] + 1]; ++p) {
         const int s = cloud.order[p];
+        if (s == hint) continue;
         const Vec3 local = R.transpose() * (cloud.centres.row(s).transpose() - t);
         const Vec3 outside = (box.lo - local).cwiseMax(local - box.hi).cwiseMax(0.0);
         const double gap = std::sqrt(outside.dot(outside));
         const double lower = gap > 0.0 ? gap - cloud.radii[s] : -INF;
-        if (lower < reach) hits_.push_back({lower, static_cast<int>(hits_.size()), s});
+        if (lower < first_bar) hits_.push_back({lower, static_cast<int>(hits_.size()), s});
       }
     }
   }
   std::sort(hits_.begin(), hits_.end(), [](const Hit& u, const Hit& v) {
     return u.lower < v.lower || (u.lower == v.lower && u.position < v.position);
   });
-  const coal::Transform3s tf(R, t);
   NearestSphere found;
   for (const Hit& h : hits_) {
-    if (h.lower >= std::min(out.distance, reach)) break;  // none left nearer, nor in reach
-    sphere_distance(shape, tf, cloud.centres.row(h.sphere).transpose(), cloud.radii[h.sphere],
-                    found);
+    const double bar = std::min(out.distance, reach);
+    if (h.lower >= bar) break;  // none left nearer, nor in reach
+    const Vec3 centre = cloud.centres.row(h.sphere).transpose();
+    const double radius = cloud.radii[h.sphere];
+    if (n_planes_ > 0 && plane_bound(centre) - radius >= bar) continue;  // a plane keeps it
+    sphere_distance(shape, tf, centre, radius, found);
     if (found.distance < out.distance) {
       out = found;
       out.sphere = h.sphere;
     }
+    add_plane(centre, found);
   }
   return out.distance < reach;
+}
+
+// clouds.nearest.separating_plane: the link lies in n . x <= offset (centre outside it).
+void CloudQuery::add_plane(const Vec3& centre, const NearestSphere& found) {
+  const Vec3 gap = centre - found.on_link;
+  const double norm = std::sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]);
+  if (!(found.distance > 0.0) || norm <= 0.0) return;
+  const Vec3 n = gap / norm;
+  const double offset = n[0] * found.on_link[0] + n[1] * found.on_link[1] + n[2] * found.on_link[2];
+  Plane& p = planes_[static_cast<std::size_t>(next_plane_)];
+  p = {n, offset};
+  next_plane_ = (next_plane_ + 1) % MAX_PLANES;
+  n_planes_ = std::min(n_planes_ + 1, MAX_PLANES);
+}
+
+// clouds.nearest.plane_bound: the largest gap of the centre beyond a plane [m].
+double CloudQuery::plane_bound(const Vec3& c) const {
+  double bound = -INF;
+  for (int j = 0; j < n_planes_; ++j) {
+    const Plane& p = planes_[static_cast<std::size_t>(j)];
+    bound = std::max(bound, p.n[0] * c[0] + p.n[1] * c[1] + p.n[2] * c[2] - p.offset);
+  }
+  return bound;
 }
 
 void CloudQuery::sphere_distance(const coal::CollisionGeometry& shape,

@@ -8,10 +8,12 @@
 // world box grown by the reach and the largest radius, bounds each one's distance below
 // by its centre's distance to the link's own box (none for a centre inside it), and asks
 // coal (the link against one sphere) in the order of that bound until it reaches the
-// best distance found or the reach. Nothing is allocated per query: the scratch list
+// best distance found or the reach; a sphere that a separating plane met so far (through
+// the link's nearest point to an earlier centre) keeps as far is skipped. Nothing is allocated per query: the scratch list
 // is reserved for every sphere once.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -28,6 +30,8 @@ namespace clik {
 // sphere of radius 0 (a point) is given, its distance corrected by it [m].
 constexpr double CLOUD_GJK_TOLERANCE = 1e-9;
 constexpr double POINT_RADIUS = 1e-9;
+// Separating planes a query keeps (the latest) to skip spheres they keep far.
+constexpr int MAX_PLANES = 4;
 
 struct CloudConfig {
   std::string name;
@@ -63,9 +67,11 @@ class CloudQuery {
   CloudQuery();
   // Room for a cloud of `spheres` spheres (once per cloud, not per query).
   void reserve(int spheres);
-  // The link's nearest sphere if nearer than `reach` [m] (clouds.nearest.nearest_sphere).
+  // The link's nearest sphere if nearer than `reach` [m] (clouds.nearest.nearest_sphere);
+  // sphere `hint` (the pair's last nearest, -1: none) is asked first, its distance
+  // narrowing the cells searched.
   bool nearest(const CloudConfig& cloud, const coal::CollisionGeometry& shape,
-               const LocalBox& box, const pinocchio::SE3& placement, double reach,
+               const LocalBox& box, const pinocchio::SE3& placement, double reach, int hint,
                NearestSphere& out);
 
  private:
@@ -74,8 +80,17 @@ class CloudQuery {
     int position;  // order of collection (the stable sort's tie-break)
     int sphere;
   };
+  struct Plane {
+    Vec3 n = Vec3::Zero();  // the link lies in n . x <= offset
+    double offset = 0.0;
+  };
   void sphere_distance(const coal::CollisionGeometry& shape, const coal::Transform3s& tf,
                        const Vec3& centre, double radius, NearestSphere& out);
+  void add_plane(const Vec3& centre, const NearestSphere& found);
+  double plane_bound(const Vec3& centre) const;
+
+  std::array<Plane, MAX_PLANES> planes_;
+  int n_planes_ = 0, next_plane_ = 0;
 
   std::vector<Hit> hits_;
   coal::DistanceRequest request_;
