@@ -18,6 +18,7 @@ from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
 
 from clik import trajectory
+from clik.clouds.cloud_obstacle import CloudObstacle, EmptyCloudWarning
 from clik.constraints.collision_scene import NoCollisionGeometryWarning, SkippedGeometryWarning
 from clik.constraints.joint_thresholds import ThresholdCapWarning
 from clik.control import Controller, Tick
@@ -67,10 +68,12 @@ from clik.tasks.task import Task
 __all__ = [
     "ClikError",
     "ClikWarning",
+    "CloudObstacle",
     "ComTask",
     "Controller",
     "DistanceTask",
     "EngineError",
+    "EmptyCloudWarning",
     "EqualityIgnoredWarning",
     "ExportError",
     "FrameNotFound",

@@ -4,7 +4,8 @@ docs/method.md, "Obstacles from point clouds": :func:`~clik.clouds.read.read_clo
 reads an ``(N, 3)`` ``.npy``, a PLY or a PCD file within budgets;
 :func:`~clik.clouds.voxels.voxel_spheres` turns the points into the spheres (C1) the
 rows keep away from; :class:`~clik.clouds.cloud_obstacle.CloudObstacle` is the obstacle
-a :class:`~clik.constraints.ConstraintSet` takes (``clouds=[...]``).
+the cloud rows keep the links away from
+(:class:`~clik.constraints.cloud_avoidance.CloudAvoidance`, in a set's ``kinds=[...]``).
 """
 
 from clik.clouds.cloud_obstacle import CloudObstacle, EmptyCloudWarning

@@ -21,7 +21,6 @@ from clik.bounds import in_range
 from clik.clouds.grid import SphereGrid, grid_cell, sphere_grid
 from clik.clouds.read import finite_points, read_cloud
 from clik.clouds.voxels import voxel_spheres
-from clik.constraints.obstacle import read_only_vector3
 from clik.errors import ClikWarning, InputError
 
 DEFAULT_VOXEL = 0.01
@@ -72,8 +71,8 @@ class CloudObstacle:
             raise InputError(f"obstacles.{name}.points", "an (N, 3) array of points [m]", shape)
         self.name, self.voxel, self.threshold = name, float(voxel), threshold
         self.source = source or f"obstacles.{name}.points"
-        self.position = read_only_vector3(position, f"obstacles.{name}.position")
-        self.rpy = read_only_vector3(rpy, f"obstacles.{name}.rpy")
+        self.position = _vector3(position, f"obstacles.{name}.position")
+        self.rpy = _vector3(rpy, f"obstacles.{name}.rpy")
         self.rotation = pin.rpy.rpyToMatrix(*self.rpy)
         read = finite_points(array, self.source)
         self.dropped, self.removed = read.dropped, 0
@@ -141,6 +140,15 @@ class CloudObstacle:
             "rpy": self.rpy.tolist(),
             "source": self.source,
         }
+
+
+def _vector3(value: object, field: str) -> np.ndarray:
+    """Three finite numbers as a new read-only array (a position [m], an rpy [rad])."""
+    array = np.array(value, dtype=float) if _numeric(value) else np.zeros(0)
+    if array.shape != (3,) or not np.all(np.isfinite(array)):
+        raise InputError(field, "three finite numbers", value)
+    array.flags.writeable = False
+    return array
 
 
 def _numeric(points: object) -> bool:

@@ -24,7 +24,7 @@ import numpy as np
 
 from clik.clouds.grid import SphereGrid, cells_of_box
 
-GJK_TOLERANCE = 1e-9
+CLOUD_GJK_TOLERANCE = 1e-9
 """coal's GJK/EPA tolerance of a link-sphere distance [m] (as the collision scene's)."""
 
 MAX_PLANES = 4
@@ -152,7 +152,7 @@ def sphere_distance(
     """Coal's signed distance from a convex shape to a sphere, and the witness points."""
     request, result = coal.DistanceRequest(), coal.DistanceResult()
     request.enable_signed_distance = True
-    request.gjk_tolerance = request.epa_tolerance = GJK_TOLERANCE
+    request.gjk_tolerance = request.epa_tolerance = CLOUD_GJK_TOLERANCE
     ball = max(radius, POINT_RADIUS)
     coal.distance(
         shape, placement, coal.Sphere(ball), coal.Transform3s(np.eye(3), centre), request, result

@@ -30,13 +30,16 @@ def voxel_spheres(points: np.ndarray, voxel: float) -> tuple[np.ndarray, np.ndar
     if voxel == 0.0 or len(points) == 0:
         return points.copy(), np.zeros(len(points))
     keys = np.floor(points / voxel).astype(np.int64)
-    keys -= keys.min(axis=0)
-    span = keys.max(axis=0) + 1
-    flat = (keys[:, 0] * span[1] + keys[:, 1]) * span[2] + keys[:, 2]
-    _, owner, counts = np.unique(flat, return_inverse=True, return_counts=True)
-    sums = [np.bincount(owner, weights=points[:, a], minlength=len(counts)) for a in range(3)]
-    centres: np.ndarray = np.column_stack(sums) / counts[:, None]
-    gaps = points - centres[owner]
-    radii = np.zeros(len(counts))
-    np.maximum.at(radii, owner, np.sqrt(np.einsum("ij,ij->i", gaps, gaps)))
+    low, high = keys.min(axis=0), keys.max(axis=0)
+    span = high - low + 1
+    flat = ((keys[:, 0] - low[0]) * span[1] + (keys[:, 1] - low[1])) * span[2] + (
+        keys[:, 2] - low[2]
+    )
+    order = np.argsort(flat, kind="stable")
+    flat, inside = flat[order], points[order]
+    starts = np.concatenate([[0], np.flatnonzero(flat[1:] != flat[:-1]) + 1])
+    counts = np.diff(np.append(starts, len(flat)))
+    centres: np.ndarray = np.add.reduceat(inside, starts, axis=0) / counts[:, None]
+    gaps = inside - np.repeat(centres, counts, axis=0)
+    radii = np.maximum.reduceat(np.sqrt(np.einsum("ij,ij->i", gaps, gaps)), starts)
     return centres, radii

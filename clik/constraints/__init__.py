@@ -33,6 +33,7 @@ from clik.constraints.collision_scene import (
     NoCollisionGeometryWarning,
     SkippedGeometryWarning,
 )
+from clik.constraints.cloud_avoidance import CloudAvoidance
 from clik.constraints.cone import Cone
 from clik.constraints.constraint_run import ConstraintRun
 from clik.constraints.constraint_set import RELEASE_RULES, ConstraintSet
@@ -50,6 +51,7 @@ __all__ = [
     "RELEASE_RULES",
     "SHAPES",
     "Candidate",
+    "CloudAvoidance",
     "CollisionScene",
     "Cone",
     "ConstraintKind",

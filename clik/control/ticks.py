@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clik.constraints.cloud_avoidance import cloud_config
 from clik.constraints.registry import limit_words
 from clik.constraints.violations import ViolationRecord
 from clik.control.measured import MEASUREMENT_JUMP, JumpFound, MeasuredJoints
@@ -96,8 +95,10 @@ class Session:
 
     def replace_cloud(self, cloud: CloudObstacle, threshold: float) -> None:
         """Cloud ``cloud.name`` replaced by ``cloud`` (threshold [m]) from the next tick."""
-        if self.native is not None:
-            config = cloud_config(load(), cloud.name, cloud.spheres(threshold), threshold)
+        if self.native is not None:  # the spheres and grid built by the engine (cloud_build.cpp)
+            config, _ = load().CloudConfig.build(
+                cloud.name, cloud.local, cloud.voxel, cloud.rotation, cloud.position, threshold
+            )
             self.native.replace_cloud(config)
             return
         assert self.run.crun is not None

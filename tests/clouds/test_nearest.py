@@ -63,3 +63,24 @@ def test_the_grid_keeps_every_sphere_once_in_cell_order():
     assert grid.start[0] == 0 and grid.start[-1] == 500 and np.all(np.diff(grid.start) >= 0)
     with pytest.raises(Exception, match="cell"):
         sphere_grid(centres, np.full(500, 0.01), 0.0)
+
+
+def test_the_engine_builds_the_same_spheres_and_grid():
+    from clik.clouds import CloudObstacle
+    from clik.engine import load
+
+    rng = np.random.default_rng(5)
+    points = np.vstack([rng.uniform(-0.4, 0.4, (4000, 3)) * [1.0, 1.0, 0.05],
+                        [[np.nan, 0.0, 0.0]]])  # fmt: skip
+    for voxel in (0.0, 0.01):
+        cloud = CloudObstacle("scan", points, voxel, position=(0.1, -0.2, 0.3), rpy=(0.3, 0.2, 0.1))
+        grid = cloud.spheres(0.05)
+        built, dropped = load().CloudConfig.build(
+            "scan", points, voxel, cloud.rotation, cloud.position, 0.05
+        )
+        assert dropped == cloud.dropped == 1
+        np.testing.assert_allclose(built.centres, grid.centres, rtol=0.0, atol=1e-12)
+        np.testing.assert_allclose(built.radii, grid.radii, rtol=0.0, atol=1e-12)
+        assert built.cell == pytest.approx(grid.cell, abs=1e-15)
+        assert list(built.dims) == list(grid.dims)
+        assert list(built.order) == list(grid.order) and list(built.start) == list(grid.start)

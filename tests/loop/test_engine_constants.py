@@ -31,6 +31,9 @@ SHARED = {
     "STALL_PROGRESS": ("clik.solving.solve_problem", "STALL_PROGRESS"),
     "STALL_ITERATIONS": ("clik.solving.solve_problem", "STALL_ITERATIONS"),
     "ROTATION_TOLERANCE": ("clik.trajectory._validate", "ROTATION_TOLERANCE"),
+    "CLOUD_GJK_TOLERANCE": ("clik.clouds.nearest", "CLOUD_GJK_TOLERANCE"),
+    "POINT_RADIUS": ("clik.clouds.nearest", "POINT_RADIUS"),
+    "MAX_PLANES": ("clik.clouds.nearest", "MAX_PLANES"),
 }
 """Engine attribute -> (Python module, name) of the same number."""
 

@@ -11,10 +11,12 @@
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/optional.h>
+#include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
 #include "boundary.hpp"
+#include "constraints/cloud_build.hpp"
 #include "constraints/obstacle_rows.hpp"
 
 namespace clik {
@@ -218,6 +220,9 @@ void CloudRows::records(std::vector<RecordArray>& out) const {
 void CloudRowsConfig::bind(nanobind::module_& m) {
   namespace nb = nanobind;
   using Centres = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  m.attr("CLOUD_GJK_TOLERANCE") = CLOUD_GJK_TOLERANCE;
+  m.attr("POINT_RADIUS") = POINT_RADIUS;
+  m.attr("MAX_PLANES") = MAX_PLANES;
   nb::class_<CloudConfig>(m, "CloudConfig", "A cloud's voxel spheres in their grid.")
       .def(
           "__init__",
@@ -234,8 +239,30 @@ void CloudRowsConfig::bind(nanobind::module_& m) {
           nb::arg("threshold"),
           "clik.clouds.grid.SphereGrid's arrays: centres (K, 3), radii (K) [m], cell [m], "
           "low (3) [m], dims (3), order (K), start (cells + 1); threshold d_o [m].")
+      .def_static(
+          "build",
+          [](const std::string& name,
+             const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>&
+                 points,
+             double voxel, const Mat3& rotation, const Vec3& position, double threshold) {
+            int dropped = 0;
+            CloudConfig cloud = build_cloud(name, points, voxel, rotation, position, threshold,
+                                            dropped);
+            return std::make_pair(std::move(cloud), dropped);
+          },
+          nb::arg("name"), nb::arg("points"), nb::arg("voxel"), nb::arg("rotation"),
+          nb::arg("position"), nb::arg("threshold"),
+          "(CloudConfig, dropped): the voxel spheres and grid of points (N, 3) [m] in the "
+          "cloud's frame, as clik.clouds builds them (NaN or infinite rows dropped).")
       .def_ro("name", &CloudConfig::name)
       .def_ro("threshold", &CloudConfig::threshold)
+      .def_ro("centres", &CloudConfig::centres)
+      .def_ro("radii", &CloudConfig::radii)
+      .def_ro("cell", &CloudConfig::cell)
+      .def_ro("low", &CloudConfig::low)
+      .def_ro("dims", &CloudConfig::dims)
+      .def_ro("order", &CloudConfig::order)
+      .def_ro("start", &CloudConfig::start)
       .def_prop_ro("size", &CloudConfig::size);
 
   nb::class_<CloudRowsConfig>(m, "CloudRowsConfig",
