@@ -10,7 +10,8 @@ box), and coal is asked (the link against one sphere) in the order of that bound
 it reaches the best distance found or ``reach``. Each answer with the centre outside
 the link gives a separating plane (through the link's nearest point, normal to it): a
 sphere that a plane met so far keeps as far as the best is not asked (on a flat table
-under a flat link the box bound ties for every sphere below; the planes do not). The compiled engine's
+under a flat link the box bound ties for every sphere below; the planes do not). The
+compiled engine's
 ``src/engine/constraints/cloud_query.cpp`` does the same, step for step.
 """
 

@@ -28,12 +28,12 @@ and one C++ type; the core (:class:`ConstraintRun`) never names a kind:
   its kinds show (``cset.obstacles``): a set changes only through its methods.
 """
 
+from clik.constraints.cloud_avoidance import CloudAvoidance
 from clik.constraints.collision_scene import (
     CollisionScene,
     NoCollisionGeometryWarning,
     SkippedGeometryWarning,
 )
-from clik.constraints.cloud_avoidance import CloudAvoidance
 from clik.constraints.cone import Cone
 from clik.constraints.constraint_run import ConstraintRun
 from clik.constraints.constraint_set import RELEASE_RULES, ConstraintSet

@@ -171,5 +171,5 @@ def test_a_cloud_that_is_not_a_name_of_the_set_is_refused(panda, scene):
     ctl = clik.Controller(task, constraints=cset, q0=panda.q_reference)
     with pytest.raises(clik.InputError, match="one of \\['scan'\\]"):
         ctl.update_cloud("lidar", points)
-    with pytest.raises(clik.InputError, match="obstacles.scan.points"):
+    with pytest.raises(clik.InputError, match=r"obstacles\.scan\.points"):
         ctl.step(p0, obstacles={"scan": np.zeros((4, 2))})

@@ -28,6 +28,7 @@ import pinocchio as pin
 import pytest
 
 import clik
+from clik.clouds import CloudObstacle
 from clik.constraints import (
     ConstraintRun,
     ConstraintSet,
@@ -37,7 +38,6 @@ from clik.constraints import (
     Obstacle,
     ObstacleAvoidance,
 )
-from clik.clouds import CloudObstacle
 from clik.constraints.cloud_avoidance import CloudAvoidance
 from clik.constraints.cone import Cone
 from clik.constraints.kind import Sample
@@ -359,7 +359,7 @@ BAD_INPUT = [
     (Cone, lambda r: Cone(r, "tip", [0, 0, 1], [0, 0, 1], 0.0), "constraints.cone.angle"),
     (CloudAvoidance, lambda r: CloudAvoidance([np.zeros((3, 3))]), "clouds[0]"),
     (CloudAvoidance, lambda r: CloudObstacle("scan", np.zeros((4, 2))), "obstacles.scan.points"),
-    (CloudAvoidance, lambda r: CloudObstacle("scan", np.zeros((4, 3)), -0.1), "obstacles.scan.voxel"),
+    (CloudAvoidance, lambda r: CloudObstacle("s", np.zeros((4, 3)), -0.1), "obstacles.s.voxel"),
     (
         Cone,
         lambda r: Cone(r, "tip", [0, 0, 1], [0, 0, 1], 0.2, threshold=0.2),
