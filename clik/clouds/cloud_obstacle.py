@@ -99,6 +99,38 @@ class CloudObstacle:
         cloud.dropped = read.dropped
         return cloud
 
+    @classmethod
+    def from_depth(
+        cls, name: str, depth: np.ndarray, intrinsics: Any, scale: float = 1.0,
+        max_depth: float = 10.0, **settings: Any,
+    ) -> CloudObstacle:  # fmt: skip
+        """A cloud seen by a depth camera (:func:`~clik.clouds.depth.depth_points`).
+
+        The cloud's frame is the camera's optical frame (x right, y down, z forward):
+        its pose is ``position`` and ``rpy`` in ``settings``. Pixels of depth 0, NaN or
+        beyond ``max_depth`` [m] are left out and counted in :attr:`dropped`.
+        """
+        from clik.clouds.depth import depth_points
+
+        points, left_out = depth_points(depth, intrinsics, pin.SE3.Identity(), scale, max_depth)
+        cloud = cls(name, points, source="depth image", **settings)
+        cloud.dropped = left_out
+        return cloud
+
+    @classmethod
+    def from_bag(
+        cls, name: str, folder: str, topic: str | None = None, index: int = -1, **settings: Any
+    ) -> CloudObstacle:
+        """A rosbag2 folder's ``sensor_msgs/PointCloud2`` (:func:`~clik.clouds.bag.read_bag_cloud`).
+
+        The cloud's frame is the message's ``frame_id``: its pose is ``position`` and
+        ``rpy`` in ``settings``.
+        """
+        from clik.clouds.bag import read_bag_cloud
+
+        points, frame = read_bag_cloud(folder, topic, index)
+        return cls(name, points, source=f"{folder} ({frame})", **settings)
+
     def with_points(self, points: np.ndarray) -> CloudObstacle:
         """The same cloud (frame, voxel, threshold) with new points in its frame [m]."""
         return CloudObstacle(

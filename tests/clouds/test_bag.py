@@ -69,3 +69,13 @@ def test_a_wrong_topic_or_folder_is_named(tmp_path: Path) -> None:
         read_bag_cloud(bag, index=3)
     with pytest.raises(InputError, match="a rosbag2 folder"):
         read_bag_cloud(tmp_path / "nothing")
+
+
+def test_a_bag_cloud_is_a_cloud_obstacle_placed_by_its_frame(tmp_path: Path) -> None:
+    from clik.clouds import CloudObstacle
+
+    last = np.array([[0.5, -0.25, 2.0], [np.nan, 0.0, 0.0], [1.0, 1.0, 1.0]])
+    bag = write_bag(tmp_path, [last])
+    cloud = CloudObstacle.from_bag("scan", str(bag), voxel=0.0, position=(1.0, 0.0, 0.0))
+    assert cloud.dropped == 1 and "camera_optical" in cloud.source
+    np.testing.assert_allclose(cloud.world, [[1.5, -0.25, 2.0], [2.0, 1.0, 1.0]], atol=1e-6)

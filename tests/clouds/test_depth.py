@@ -36,3 +36,19 @@ def test_bad_images_and_settings_are_named():
         depth_points(np.ones((2, 2)), k, pin.SE3.Identity(), scale=0.0)
     with pytest.raises(InputError, match="intrinsics"):
         Intrinsics(0.0, 500.0, 1.0, 1.0)
+
+
+def test_a_depth_image_is_a_cloud_obstacle_in_the_cameras_frame():
+    from clik.clouds import CloudObstacle
+
+    k = Intrinsics(fx=500.0, fy=520.0, cx=320.0, cy=240.0)
+    depth = np.full((48, 64), 1.5)
+    depth[0, :] = np.nan  # nothing seen
+    # the optical frame looking along the world's +x: rpy of that rotation
+    rotation = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+    cloud = CloudObstacle.from_depth(
+        "camera", depth, k, voxel=0.0, position=(0.2, 0.0, 1.0), rpy=pin.rpy.matrixToRpy(rotation)
+    )
+    assert cloud.dropped == 64 and len(cloud.local) == 47 * 64
+    np.testing.assert_allclose(cloud.world[:, 0], 1.7, atol=1e-12)
+    np.testing.assert_allclose(cloud.spheres(0.05).centres[:, 0], 1.7, atol=1e-12)
