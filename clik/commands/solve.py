@@ -73,8 +73,9 @@ def print_summary(name: str, summary: dict) -> None:
         f"final {_number(summary['final_task_error'], '.3e')} {unit}"
     )
     print_task_errors(summary)
-    if summary.get("min_obstacle_distance") is not None:
-        print(f"  min link-obstacle distance {summary['min_obstacle_distance']:.4f} m")
+    obstacles = obstacle_line(summary)
+    if obstacles is not None:
+        print(f"  {obstacles}")
     speeds = speed_line(summary)
     if speeds is not None:
         print(f"  {speeds}")
@@ -85,6 +86,33 @@ def print_summary(name: str, summary: dict) -> None:
                 f"{e['action']} {e['constraint']} @ {e['t']:.3f}s" for e in summary["events"]
             )
         )
+
+
+def obstacle_line(summary: dict) -> str | None:
+    """``min link-obstacle distance 0.0298 m (clouds: scan 0.0298 m)``, or None: no obstacle.
+
+    A cloud no link came within its search reach of (``threshold +``
+    :data:`~clik.constraints.cloud_avoidance.SEARCH_MARGIN`; its distance is ``null``) is
+    said to be farther than that reach.
+    """
+    from clik.constraints.cloud_avoidance import SEARCH_MARGIN
+
+    nearest = summary.get("min_obstacle_distance")
+    by_cloud = summary.get("min_cloud_distance_by_cloud") or {}
+    if nearest is None and not by_cloud:
+        return None
+    reach = {
+        c["name"]: float(c["threshold"]) + SEARCH_MARGIN
+        for c in summary.get("info", {}).get("clouds", [])
+    }
+    clouds = [
+        f"{name} {d:.4f} m" if d is not None else f"{name} > {reach.get(name, 0.0):.4f} m"
+        for name, d in by_cloud.items()
+    ]
+    line = "min link-obstacle distance " + (
+        f"{nearest:.4f} m" if nearest is not None else f"> {min(reach.values(), default=0.0):.4f} m"
+    )
+    return line + (f" (clouds: {', '.join(clouds)})" if clouds else "")
 
 
 def print_task_errors(summary: dict) -> None:

@@ -1,10 +1,18 @@
-"""Build a :class:`ConstraintSet` from a scenario's ``[[obstacles]]`` and ``[constraints]``."""
+"""Build a :class:`ConstraintSet` from a scenario's ``[[obstacles]]`` and ``[constraints]``.
+
+Shape obstacles become :class:`Obstacle` objects; ``shape = "cloud"`` ones
+(:mod:`clik.scenarios.cloud_table`) :class:`~clik.clouds.cloud_obstacle.CloudObstacle` objects,
+read now, in one :class:`~clik.constraints.cloud_avoidance.CloudAvoidance` kind with the
+obstacles' threshold, rows and gain.
+"""
 
 from __future__ import annotations
 
 import math
 from typing import TYPE_CHECKING, Any
 
+from clik.clouds.cloud_obstacle import CloudObstacle
+from clik.constraints.cloud_avoidance import CloudAvoidance
 from clik.constraints.constraint_set import ConstraintSet
 from clik.constraints.dexterity import Dexterity
 from clik.constraints.joint_limits import JointLimits, convert_override
@@ -42,10 +50,12 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
     ``threshold`` in radians (no ``unit = "deg"``) that looks like degrees and is wider
     than a revolute joint's whole range is refused, naming the joint (:func:`_check_radians`).
     The dexterity row (:class:`Dexterity`) keeps the task's manipulability above
-    ``[constraints.dexterity] threshold``.
+    ``[constraints.dexterity] threshold``. The clouds (:func:`_clouds`) are read now.
     """
     obstacles = []
     for i, spec in enumerate(scenario.obstacles):
+        if spec["shape"] == "cloud":
+            continue
         kwargs = {k: spec[k] for k in ("radius", "size", "length", "file", "scale") if k in spec}
         try:
             obstacles.append(
@@ -66,6 +76,9 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
     joint_limits = _joint_limits(scenario, robot, jl_spec)
     dx_spec = c.get("dexterity") or {"enabled": False, "gain": None}
     kinds = _table_kinds(scenario, robot)
+    clouds = _clouds(scenario, robot)
+    if clouds:
+        kinds.insert(0, CloudAvoidance(clouds, obs["enabled"], obs["threshold"], obs["gain"]))
     release = obs["release"] or c["release"]
     try:
         return ConstraintSet(
@@ -90,6 +103,37 @@ def build_constraints(scenario: Scenario, robot: Robot, task: Task) -> Constrain
         )
     except ClikError as exc:
         raise ScenarioError(scenario.file, "constraints", str(exc)) from None
+
+
+def _clouds(scenario: Scenario, robot: Robot) -> list[CloudObstacle]:
+    """The ``shape = "cloud"`` obstacles, read from their files.
+
+    With ``self_filter``, the points within ``self_padding`` of the robot at the start
+    configuration (``initial.q``) are left out.
+
+    Raises:
+        ScenarioError: A file that cannot be read (``obstacles[i].file``), bad settings.
+    """
+    clouds = []
+    for i, spec in enumerate(scenario.obstacles):
+        if spec["shape"] != "cloud":
+            continue
+        where = f"obstacles[{i}]"
+        settings = {k: spec[k] for k in ("voxel", "position", "rpy", "threshold")}
+        try:
+            cloud = CloudObstacle.from_file(spec["name"], spec["file"], **settings)
+        except InputError as exc:
+            key = f"{where}.file" if exc.field == str(spec["file"]) else where
+            raise ScenarioError(scenario.file, key, str(exc)) from None
+        if spec["self_filter"]:
+            q0 = robot.q_reference if scenario.initial_q is None else scenario.initial_q
+            try:
+                q0 = robot.check_configuration(q0, "initial.q")
+            except InputError as exc:
+                raise ScenarioError(scenario.file, "initial.q", str(exc)) from None
+            cloud = cloud.without_robot(robot, q0, spec["self_padding"])
+        clouds.append(cloud)
+    return clouds
 
 
 def _joint_limits(scenario: Scenario, robot: Robot, jl_spec: dict[str, Any]) -> JointLimits | None:

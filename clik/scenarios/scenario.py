@@ -22,7 +22,7 @@ One task is ``[task]`` and ``[trajectory]``; several are ``[[tasks]]``, each wit
 
 A scenario is data only: TOML has no code, no includes and no variables, and
 no key here names a file to read but ``robot.source``, ``robot.package_dirs``,
-``robot.srdf`` and an obstacle's mesh ``file``: paths the user chose (absolute, or relative
+``robot.srdf`` and an obstacle's mesh or cloud ``file``: paths the user chose (absolute, or relative
 to the scenario's folder; URLs are refused, nothing is fetched). A xacro
 ``robot.source`` (``.xacro``) takes ``robot.xacro_args``, a table of strings, which
 also expand an SRDF with xacro markup (``robot.srdf = "arm.srdf.xacro"``).
@@ -43,6 +43,7 @@ from clik.errors import ScenarioError
 from clik.model.base import BASES, FIXED, check_base_speed
 from clik.model.joints import JointValues
 from clik.model.xacro_expand import is_xacro
+from clik.scenarios.cloud_table import cloud_keys
 from clik.scenarios.fields import gain_value
 from clik.scenarios.ros_table import ros_table
 from clik.scenarios.speed_tables import joint_speed_table, velocity_limits_table
@@ -64,7 +65,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-SHAPES = ("sphere", "box", "capsule", "cylinder", "mesh")
+SHAPES = ("sphere", "box", "capsule", "cylinder", "mesh", "cloud")
 
 
 PRISMATIC_THRESHOLD = 0.005
@@ -342,8 +343,13 @@ def _obstacle(ob: Table, folder: Path) -> dict[str, Any]:
     scale = angle_scale(ob)
     rpy = ob.vector("rpy", 3, [0.0, 0.0, 0.0], bound=MAX_ANGLE / scale)
     out["rpy"] = [v * scale for v in rpy]
-    out["velocity"] = ob.vector("velocity", 3, [0.0, 0.0, 0.0], "[m/s]", MAX_SPEED)
     out["threshold"] = _length(ob, "threshold", None, strict=True)
+    if shape == "cloud":  # at rest, read when the run is built (clik.scenarios.cloud_table)
+        out.update(cloud_keys(ob))
+        out["file"] = _resolve(folder, out["file"])
+        ob.done()
+        return out
+    out["velocity"] = ob.vector("velocity", 3, [0.0, 0.0, 0.0], "[m/s]", MAX_SPEED)
     if shape == "sphere":
         out["radius"] = _length(ob, "radius")
     elif shape == "box":

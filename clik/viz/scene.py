@@ -5,11 +5,12 @@ self-contained HTML file (:func:`clik.viz.export_html`). Scene tree:
 
 - ``/meshcat/robot/<joint>/<geometry>``: the robot (visual or collision geometry);
 - ``/meshcat/obstacles/<name>/{body,shell}``: obstacles and threshold shells;
+- ``/meshcat/clouds/<name>/points``: point-cloud obstacles (:mod:`clik.viz.cloud_layer`);
 - ``/meshcat/paths/reference`` and ``/meshcat/paths/trail/<k>``: the task frame's paths;
 - ``/meshcat/tasks/<name>/...``: a several-task run's other tasks, when the scene is
   given the run's goals (:mod:`clik.viz.task_layer`);
 - ``/meshcat/regions/<name>``: the regions the kinds report (:mod:`clik.viz.shape_layer`);
-- ``/meshcat/witness/...``: witness segments of the obstacle rows;
+- ``/meshcat/witness/...``: witness segments of the obstacle, self-collision and cloud rows;
 
 then one animation (real time, ``fps`` frames per second, looping) and the
 default camera.
@@ -25,6 +26,7 @@ import numpy as np
 from clik.errors import InputError
 from clik.viz import palette
 from clik.viz.camera import View, default_view, is_planar
+from clik.viz.cloud_layer import cloud_commands
 from clik.viz.commands import Command, delete, set_animation, set_property
 from clik.viz.obstacle_layer import obstacle_commands, obstacle_tracks, placement
 from clik.viz.path_layer import reference_commands, trail_commands
@@ -146,9 +148,9 @@ def build_scene(
     clips.update(highlight_tracks(states, parts, timeline))
 
     obstacles = list(result.info.get("obstacles") or [])
-    t0 = float(result.t[0])
-    commands += obstacle_commands(obstacles, t0)
-    clips.update(obstacle_tracks(obstacles, timeline, t0))
+    obstacle_cmds, obstacle_nodes = _obstacle_layer(result, obstacles)
+    commands += obstacle_cmds
+    clips.update(obstacle_tracks(obstacles, timeline, float(result.t[0])))
 
     region_cmds, region_clips = region_layer(
         robot, list(result.info.get("shapes") or []), q, timeline
@@ -176,8 +178,18 @@ def build_scene(
     robot_nodes = sorted(
         {p for p in clips if p.startswith("/meshcat/robot/") and not p.endswith("<object>")}
     )
-    obstacle_nodes = [f"/meshcat/obstacles/{o['name']}" for o in obstacles]
     return Scene(commands, timeline, view, robot_nodes, obstacle_nodes, paths, scene_legend(paths))
+
+
+def _obstacle_layer(
+    result: TrackingResult, obstacles: list[dict[str, Any]]
+) -> tuple[list[Command], list[str]]:
+    """The obstacles (at their poses at the run's start) and the clouds; their nodes."""
+    commands = obstacle_commands(obstacles, float(result.t[0]))
+    clouds = cloud_commands(result)
+    nodes = [f"/meshcat/obstacles/{o['name']}" for o in obstacles]
+    nodes += [c["path"].rpartition("/")[0] for c in clouds]
+    return commands + clouds, nodes
 
 
 def _geometry_model(robot: Robot, geometry: Geometry) -> pin.GeometryModel:

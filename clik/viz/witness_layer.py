@@ -4,9 +4,10 @@ An obstacle row (docs/method.md, eqs. (13)-(15)) acts along the segment between 
 two witness points, ``p_o`` on the link and ``c`` on the obstacle. Two kinds
 of segments are drawn:
 
-- one per obstacle or self-collision row that was ever active, in
-  :data:`~clik.viz.palette.ROW_ACTIVE`, between the witness points the run
-  recorded (``result.extra["witness"]``), visible while the row is active;
+- one per distance row that was ever active (obstacle, self-collision, cloud: every
+  row whose kind gives witness points), in :data:`~clik.viz.palette.ROW_ACTIVE`,
+  between the witness points the run recorded (``result.extra["witness"]``), visible
+  while the row is active;
 - one per obstacle for the closest link (computed here with the same convex
   geometry as the constraints), visible while no row of that obstacle is
   active and the link is near, in :data:`~clik.viz.palette.MONITOR_NEAR` inside
@@ -89,7 +90,11 @@ def segment_tracks(
 def row_segments(
     result: TrackingResult, timeline: Timeline
 ) -> tuple[list[Command], dict[str, list[dict[str, Any]]]]:
-    """Segments of the active obstacle and self-collision rows, from the recorded witnesses."""
+    """Segments of the active distance rows, from the recorded witnesses.
+
+    A row's kind records its witness points (:attr:`~clik.constraints.kind.Candidate.witness`:
+    obstacle, self-collision and cloud rows); the other rows' are NaN, and not drawn.
+    """
     commands: list[Command] = []
     clips: dict[str, list[dict[str, Any]]] = {}
     active, witness = result.extra.get("active"), result.extra.get("witness")
@@ -99,8 +104,6 @@ def row_segments(
     active = np.asarray(active)[timeline.index]
     witness = np.asarray(witness)[timeline.index]
     for code, name in enumerate(names):
-        if not name.startswith(("obstacle:", "self:")):
-            continue
         hit = active == code
         if not hit.any():
             continue

@@ -34,6 +34,8 @@ SHARED = {
     "CLOUD_GJK_TOLERANCE": ("clik.clouds.nearest", "CLOUD_GJK_TOLERANCE"),
     "POINT_RADIUS": ("clik.clouds.nearest", "POINT_RADIUS"),
     "MAX_PLANES": ("clik.clouds.nearest", "MAX_PLANES"),
+    "MAX_GRID_SPAN": ("clik.clouds.grid", "MAX_GRID_SPAN"),
+    "MIN_CELL": ("clik.clouds.grid", "MIN_CELL"),
 }
 """Engine attribute -> (Python module, name) of the same number."""
 

@@ -223,6 +223,8 @@ void CloudRowsConfig::bind(nanobind::module_& m) {
   m.attr("CLOUD_GJK_TOLERANCE") = CLOUD_GJK_TOLERANCE;
   m.attr("POINT_RADIUS") = POINT_RADIUS;
   m.attr("MAX_PLANES") = MAX_PLANES;
+  m.attr("MAX_GRID_SPAN") = MAX_GRID_SPAN;
+  m.attr("MIN_CELL") = MIN_CELL;
   nb::class_<CloudConfig>(m, "CloudConfig", "A cloud's voxel spheres in their grid.")
       .def(
           "__init__",

@@ -1,0 +1,1 @@
+"""Tests of scenario files' keys that :mod:`clik.scenarios` reads and builds."""
