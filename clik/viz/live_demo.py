@@ -22,7 +22,8 @@ from collections.abc import Iterator, Sequence
 import numpy as np
 
 import clik
-from clik.constraints import ConstraintSet, JointLimits, Obstacle
+from clik.clouds import CloudObstacle
+from clik.constraints import CloudAvoidance, ConstraintSet, JointLimits, Obstacle
 from clik.viz.live import stop_server
 from clik.viz.live_view import LiveView
 
@@ -57,8 +58,38 @@ def random_walk(start: np.ndarray, seed: int, reach: float = 0.12) -> Iterator[T
         yield position.copy(), None  # a device gives positions only
 
 
-def scene() -> tuple[clik.Robot, clik.Task, ConstraintSet]:
-    """The Panda, its hand's position task, a ball moving across, and its joint ranges."""
+def box_skin(half: np.ndarray, spacing: float) -> np.ndarray:
+    """Points on a box's faces (centred at 0) every ``spacing`` [m]: a depth camera's box."""
+    faces = []
+    for axis in range(3):
+        u, v = [a for a in range(3) if a != axis]
+        grid = np.meshgrid(*(np.arange(-half[a], half[a] + 1e-9, spacing) for a in (u, v)))
+        for sign in (-1.0, 1.0):
+            face = np.zeros((grid[0].size, 3))
+            face[:, u], face[:, v], face[:, axis] = (
+                grid[0].ravel(),
+                grid[1].ravel(),
+                sign * half[axis],
+            )
+            faces.append(face)
+    return np.vstack(faces)
+
+
+BOX = box_skin(np.array([0.06, 0.06, 0.12]), 0.005)
+"""The sliding box's points in its own frame [m] (about 3,800)."""
+
+
+def box_at(t: float) -> np.ndarray:
+    """The sliding box's centre at time ``t`` [s]: from 0.4 m beside the hand toward the arm."""
+    return np.array([0.31, 0.4 - 0.06 * min(t, 2.5), 0.59])
+
+
+def scene(obstacle: str = "ball") -> tuple[clik.Robot, clik.Task, ConstraintSet]:
+    """The Panda, its hand's position task, a ball moving across, and its joint ranges.
+
+    ``obstacle = "cloud"``: a box seen as points instead, sliding toward the arm; each tick
+    gives the controller its new points (``ctl.step(..., obstacles={"scan": points})``).
+    """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the fingers are locked: mimic warning
         robot = clik.Robot.load("panda", lock=FINGERS)
@@ -66,6 +97,10 @@ def scene() -> tuple[clik.Robot, clik.Task, ConstraintSet]:
     ball = Obstacle(
         "ball", "sphere", [0.36, 0.2, 0.55], radius=0.03, velocity=[0.0, -0.04, 0.0]
     )  # passes just beside the hand's circle, from about 1.5 s
+    if obstacle == "cloud":
+        cloud = CloudObstacle("scan", BOX + box_at(0.0), voxel=0.01)
+        kinds = [CloudAvoidance([cloud], threshold=0.04)]
+        return robot, task, ConstraintSet(robot, kinds=kinds, joint_limits=JointLimits(robot))
     constraints = ConstraintSet(
         robot, obstacles=[ball], obstacle_threshold=0.04, joint_limits=JointLimits(robot)
     )
@@ -74,7 +109,7 @@ def scene() -> tuple[clik.Robot, clik.Task, ConstraintSet]:
 
 def run(
     seconds: float = 10.0, target: str = "circle", view: bool = True, realtime: bool = False,
-    seed: int = 0, say: bool = True,
+    seed: int = 0, say: bool = True, obstacle: str = "ball",
 ) -> tuple[clik.TrackingResult, int]:  # fmt: skip
     """Run the session; returns its result and the number of view updates.
 
@@ -85,8 +120,9 @@ def run(
         realtime: Keep pace with the wall clock (else as fast as it runs).
         seed: The random walk's seed.
         say: Print the events and verdicts as they happen.
+        obstacle: ``"ball"`` (a moving sphere) or ``"cloud"`` (a box's points, sliding).
     """
-    robot, task, constraints = scene()
+    robot, task, constraints = scene(obstacle)
     q0 = robot.q_reference.copy()
     start = task.placement(q0).translation
     stream = circle(start, 0.06, 4.0) if target == "circle" else random_walk(start, seed)
@@ -98,7 +134,8 @@ def run(
     verdict, wall0 = "ok", time.perf_counter()
     for k in range(round(seconds / DT)):
         position, velocity = next(stream)
-        tick = ctl.step(position, velocity)
+        clouds = {"scan": BOX + box_at(k * DT)} if obstacle == "cloud" else None
+        tick = ctl.step(position, velocity, obstacles=clouds)
         if say:
             for e in tick.events:
                 print(f"t = {e['t']:7.3f} s  {e['action']:9s} {e['constraint']}")
@@ -106,7 +143,7 @@ def run(
                 print(f"t = {tick.t:7.3f} s  verdict {tick.verdict}: {tick.reason}")
         verdict = tick.verdict
         if live is not None and k % VIEW_EVERY == 0:
-            live.update(tick.q, tick.t, {"target": position})
+            live.update(tick.q, tick.t, {"target": position}, clouds)
         if realtime:
             time.sleep(max(0.0, wall0 + (k + 1) * DT - time.perf_counter()))
     return ctl.result(), 0 if live is None else live.frames
@@ -117,11 +154,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=10.0, help="session length [s]")
     parser.add_argument("--target", choices=("circle", "walk"), default="circle")
+    parser.add_argument("--obstacle", choices=("ball", "cloud"), default="ball")
     parser.add_argument("--no-view", action="store_true", help="no meshcat view")
     parser.add_argument("--realtime", action="store_true", help="keep pace with the clock")
     args = parser.parse_args(argv)
     try:
-        result, _ = run(args.seconds, args.target, not args.no_view, args.realtime)
+        result, _ = run(
+            args.seconds, args.target, not args.no_view, args.realtime, obstacle=args.obstacle
+        )
     finally:
         stop_server()
     print(f"{result.status}: {result.reason}")

@@ -14,7 +14,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from clik.clouds.drawn import MAX_DRAWN_POINTS
 from clik.viz import palette
+from clik.viz.cloud_layer import MIN_POINT_SIZE, cloud_path, points_object
 from clik.viz.commands import (
     Command,
     delete,
@@ -87,14 +89,17 @@ class LiveView:
         return str(self.server.web_url)
 
     def update(
-        self, q: np.ndarray, t: float = 0.0, targets: Mapping[str, Any] | None = None
-    ) -> None:
+        self, q: np.ndarray, t: float = 0.0, targets: Mapping[str, Any] | None = None,
+        clouds: Mapping[str, np.ndarray] | None = None,
+    ) -> None:  # fmt: skip
         """Move the robot to ``q``, the obstacles to their poses at ``t`` [s], the targets.
 
         Args:
             q: The robot's configuration (nq,).
             t: The time [s] (moving obstacles: ``position + t velocity``).
             targets: Target positions (3,) [m] or poses (``pin.SE3`` or 4x4) by name.
+            clouds: Point clouds drawn anew, by name: ``(N, 3)`` world points [m]
+                (at most :data:`~clik.clouds.drawn.MAX_DRAWN_POINTS` drawn, evenly).
         """
         model, data = self.robot.model, self.data
         pin.forwardKinematics(model, data, np.asarray(q, dtype=float))
@@ -109,8 +114,17 @@ class LiveView:
         ]
         for name, target in (targets or {}).items():
             commands.append(set_transform(_target_path(name), _marker(target)))
+        for name, points in (clouds or {}).items():
+            commands.append(live_cloud(name, np.asarray(points, dtype=float).reshape(-1, 3)))
         self.server.send_all(commands)
         self.frames += 1
+
+
+def live_cloud(name: str, points: np.ndarray) -> Command:
+    """A cloud's points (world [m], thinned to at most MAX_DRAWN_POINTS) as its scene object."""
+    stride = max(1, -(-len(points) // MAX_DRAWN_POINTS))
+    shown = points[::stride]
+    return set_object(f"{cloud_path({'name': name})}/points", points_object(shown, MIN_POINT_SIZE))
 
 
 def _target_path(name: str) -> str:

@@ -37,3 +37,18 @@ def test_a_random_walk_without_a_view() -> None:
     assert result.status == "completed", result.reason  # the ball is not reached in 1 s
     assert result.max_task_error < 5e-3  # positions only: the lag |v| / K, a few mm at most
     assert_within_limits(result, result.robot)
+
+
+def test_a_box_seen_as_points_slides_toward_the_arm() -> None:
+    try:
+        result, frames = live_demo.run(seconds=6.0, view=True, say=False, obstacle="cloud")
+    finally:
+        stop_server()
+    assert frames == len(range(0, 6000, live_demo.VIEW_EVERY))  # the cloud redrawn each frame
+    assert result.status == "completed", result.reason
+    pushed = {e["constraint"] for e in result.events if e["action"] == "activate"}
+    assert "cloud:scan:panda_link5" in pushed  # the box reaches the forearm first
+    summary = result.summary()
+    assert summary["min_cloud_distance"] >= 0.04 - 0.01  # threshold minus the voxel
+    assert result.max_task_error < 0.02
+    assert_within_limits(result, result.robot)
