@@ -173,3 +173,20 @@ def test_a_cloud_that_is_not_a_name_of_the_set_is_refused(panda, scene):
         ctl.update_cloud("lidar", points)
     with pytest.raises(clik.InputError, match=r"obstacles\.scan\.points"):
         ctl.step(p0, obstacles={"scan": np.zeros((4, 2))})
+
+
+@pytest.mark.parametrize("engine", ["python", "compiled"])
+def test_an_update_that_sees_the_arm_leaves_the_arm_out_with_a_padding(panda, scene, engine):
+    from tests.clouds.test_self_filter import link_points
+
+    task, p0, _, points, _ = scene
+    cset = ConstraintSet(panda, kinds=[CloudAvoidance([CloudObstacle("scan", points)])])
+    seen = np.vstack([points, link_points(panda, panda.q_reference)])  # the camera sees the arm
+    ctl = clik.Controller(task, constraints=cset, engine=engine, q0=panda.q_reference)
+    ctl.update_cloud("scan", seen, robot_padding=0.01)
+    tick = ctl.step(p0)
+    assert tick.verdict == "ok" and not tick.active
+    ctl.update_cloud("scan", seen)  # kept: the arm is inside its own cloud
+    tick = ctl.step(p0)
+    assert tick.verdict == "violated" and tick.active
+    assert all(name.startswith("cloud:scan:panda_") for name in tick.active)
