@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from benchmarks.cells import fmt
+from benchmarks.report_cloud import cloud_section
 from benchmarks.report_ticks import tick_section
 from benchmarks.stats import ratio
 
@@ -229,7 +230,7 @@ def ros_section(report: dict[str, Any]) -> list[str]:
 
 
 def markdown(report: dict[str, Any]) -> str:
-    """``bench.md``: the step, zoo, solve, ratio, case-study, memory and target tables.
+    """``bench.md``: the step, tick, cloud, zoo, solve, ratio, case-study, memory and target tables.
 
     Args:
         report: The report (``bench.json``'s content).
@@ -238,6 +239,7 @@ def markdown(report: dict[str, Any]) -> str:
         *header(report),
         *step_section(report),
         *tick_section(report),
+        *cloud_section(report),
         *zoo_section(report),
         *solve_section(report),
         *ratios_section(report),

@@ -10,11 +10,12 @@ import argparse
 import os
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 from benchmarks.case_study import bench_case_study
+from benchmarks.cloud_lines import CLOUD_TICK_LINES, OCTREE_LINE, bench_cloud
 from benchmarks.config import FULL, QUICK, BenchConfig, Log
 from benchmarks.machine import cpu_seconds, machine_info, versions
 from benchmarks.memory import bench_memory
@@ -60,6 +61,8 @@ REQUIRED_KEYS = (
     *(f"tick_us.{line}" for line in TICK_LINES),
     *(f"tick_quality.{line}" for line in TICK_LINES),
     "tick_error_m.panda_pose",
+    *(f"tick_us.{line}" for line in (*CLOUD_TICK_LINES, OCTREE_LINE)),
+    "cloud_update_ms",
 )
 """Dotted key paths ``bench.json`` always holds (pink's and mink's are ``null`` without
 them)."""
@@ -107,6 +110,8 @@ class Measured:
         session: A long controller session's memory
             (:func:`~benchmarks.session_memory.bench_session`).
         ros: The ROS 2 loop (:func:`~benchmarks.ros_line.bench_ros`).
+        cloud: Point-cloud obstacles (:func:`~benchmarks.cloud_lines.bench_cloud`); empty
+            when not measured.
     """
 
     steps: dict[str, Any]
@@ -118,6 +123,7 @@ class Measured:
     ticks: dict[str, Any]
     session: dict[str, Any]
     ros: dict[str, Any]
+    cloud: dict[str, Any] = field(default_factory=dict)
 
 
 def measure(config: BenchConfig, pink: Pink | None, mink: Mink | None, say: Log) -> Measured:
@@ -133,6 +139,8 @@ def measure(config: BenchConfig, pink: Pink | None, mink: Mink | None, say: Log)
     steps = bench_steps(config, pink, say)
     say("tick cost: one Python call per 1 ms tick (interleaved rounds)")
     ticks = bench_ticks(config, pink, mink, say)
+    say("point-cloud obstacles: far and near ticks, a 50k-point update, coal's octree")
+    cloud = bench_cloud(config, say)
     say("step cost of the zoo's obstacle run, robot by robot")
     zoo = bench_zoo(config, say)
     say("single-pose solve")
@@ -147,7 +155,7 @@ def measure(config: BenchConfig, pink: Pink | None, mink: Mink | None, say: Log)
     sweep = bench_sweep(config, say)
     say("ROS 2 loop on loopback (a private network namespace)")
     ros = bench_ros(config, say)
-    return Measured(steps, solve, case, memory, sweep, zoo, ticks, session, ros)
+    return Measured(steps, solve, case, memory, sweep, zoo, ticks, session, ros, cloud)
 
 
 def step_ratios(m: Measured) -> dict[str, Any]:
@@ -180,6 +188,16 @@ def step_ratios(m: Measured) -> dict[str, Any]:
     }
 
 
+def cloud_tick_us(m: Measured) -> dict[str, float | None]:
+    """The cloud lines' ``tick_us``: ``cloud_far``, ``cloud_near``, ``coal_octree_cloud``.
+
+    Args:
+        m: What the measurements returned (None per line when the cloud was not measured).
+    """
+    measured = m.cloud.get("tick_us", {})
+    return {line: measured.get(line) for line in (*CLOUD_TICK_LINES, OCTREE_LINE)}
+
+
 def tick_figures(m: Measured) -> dict[str, Any]:
     """The tick lines: medians, quality, clik's final error and the peers' ratios.
 
@@ -188,7 +206,8 @@ def tick_figures(m: Measured) -> dict[str, Any]:
 
     Returns:
         ``tick_us`` and ``tick_quality`` (every line of
-        :data:`~benchmarks.tick.TICK_LINES`, None when its library is missing),
+        :data:`~benchmarks.tick.TICK_LINES`, None when its library is missing; ``tick_us``
+        also the cloud lines', :func:`cloud_tick_us`),
         ``tick_error_m.panda_pose`` (clik's position error at its last tick [m]),
         ``ticks`` (each line's statistics and info) and ``tick_ratios`` (pink's and
         mink's medians over clik's).
@@ -198,7 +217,7 @@ def tick_figures(m: Measured) -> dict[str, Any]:
         return m.ticks[line]["median_us"] if line in m.ticks else None
 
     return {
-        "tick_us": {line: median(line) for line in TICK_LINES},
+        "tick_us": {**{line: median(line) for line in TICK_LINES}, **cloud_tick_us(m)},
         "tick_quality": {line: m.ticks.get(line, {}).get("quality") for line in TICK_LINES},
         "tick_error_m": {"panda_pose": m.ticks["panda_pose"]["final_error_m"]},
         "ticks": {
@@ -253,6 +272,8 @@ def figures(config: BenchConfig, m: Measured) -> dict[str, Any]:
         "sweep": m.sweep,
         "ros": m.ros,
         **tick_figures(m),
+        "cloud_update_ms": m.cloud.get("update_ms"),
+        "cloud": m.cloud,
     }
 
 

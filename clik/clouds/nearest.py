@@ -99,6 +99,8 @@ def nearest_sphere(
     gaps = np.sqrt(np.einsum("ij,ij->i", outside, outside))
     # a centre inside the box may be deep inside the link: no bound on its signed distance
     lower = np.where(gaps > 0.0, gaps - grid.radii[candidates], -np.inf)
+    if len(planes):  # the hint's plane bounds every sphere too (a sphere inside it as well)
+        lower = np.maximum(lower, planes_bound(planes, grid.centres[candidates]) - grid.radii[candidates])
     keep = lower < bar
     candidates, lower = candidates[keep], lower[keep]
     for i in np.argsort(lower, kind="stable"):
@@ -135,6 +137,14 @@ def separating_plane(centre: np.ndarray, found: Nearest) -> np.ndarray | None:
     n = gap / norm
     offset = n[0] * found.on_link[0] + n[1] * found.on_link[1] + n[2] * found.on_link[2]
     return np.array([n[0], n[1], n[2], offset])
+
+
+def planes_bound(planes: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """:func:`plane_bound` of each of ``centres`` (K, 3) [m]."""
+    gaps = [
+        n[0] * centres[:, 0] + n[1] * centres[:, 1] + n[2] * centres[:, 2] - n[3] for n in planes
+    ]
+    return np.max(gaps, axis=0)
 
 
 def plane_bound(planes: np.ndarray, centre: np.ndarray) -> float:

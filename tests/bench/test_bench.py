@@ -221,7 +221,7 @@ def test_targets_come_from_the_shipped_toml(quick):
     shipped = load_targets()
     assert [t["name"] for t in report["targets"]] == [t.name for t in shipped]
     assert [t["target"] for t in report["targets"]] == [t.wanted for t in shipped]
-    assert len(shipped) == 28
+    assert len(shipped) == 32
     by_measure = {(t.measure, t.over): t for t in shipped}
     assert by_measure[("memory_growth_mb.controller_session", None)].bound == 1.0
     assert by_measure[("controller_session.result_ms", None)].bound == 50.0

@@ -104,10 +104,17 @@ bool CloudQuery::nearest(const CloudConfig& cloud, const coal::CollisionGeometry
       for (int p = cloud.start[column + a[2]]; p < cloud.start[column + b[2] + 1]; ++p) {
         const int s = cloud.order[p];
         if (s == hint) continue;
-        const Vec3 local = R.transpose() * (cloud.centres.row(s).transpose() - t);
+        const Vec3 centre_s = cloud.centres.row(s).transpose();
+        const Vec3 local = R.transpose() * (centre_s - t);
         const Vec3 outside = (box.lo - local).cwiseMax(local - box.hi).cwiseMax(0.0);
-        const double gap = std::sqrt(outside.dot(outside));
-        const double lower = gap > 0.0 ? gap - cloud.radii[s] : -INF;
+        const double gap2 = outside.dot(outside), radius = cloud.radii[s];
+        double lower = -INF;  // a centre inside the box: no bound of its own
+        if (gap2 > 0.0) {
+          const double within = first_bar + radius;  // lower < first_bar: gap < within
+          if (within <= 0.0 || gap2 >= within * within) continue;
+          lower = std::sqrt(gap2) - radius;
+        }
+        if (n_planes_ > 0) lower = std::max(lower, plane_bound(centre_s) - radius);
         if (lower < first_bar) hits_.push_back({lower, static_cast<int>(hits_.size()), s});
       }
     }
