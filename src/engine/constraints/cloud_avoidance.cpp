@@ -180,7 +180,7 @@ bool CloudRows::replace_cloud(const CloudConfig& cloud) {
     query_.reserve(cloud.size());
     reach_[c] = cloud.threshold + cfg_.search_margin;
     lb_.col(c).setConstant(-INF);
-    for (int i = 0; i < n_links_; ++i) nearest_[static_cast<std::size_t>(i) * n_c_ + c].sphere = -1;
+    for (int i = 0; i < n_links_; ++i) nearest_[static_cast<std::size_t>(i) * n_c_ + c] = {};
     replaced_[static_cast<std::size_t>(c)] = 1;
     return true;
   }

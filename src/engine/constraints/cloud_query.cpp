@@ -57,6 +57,10 @@ void CloudConfig::check() {
     }
   }
   largest = k > 0 ? radii.maxCoeff() : 0.0;
+  by_cell.resize(4, k);
+  for (Eigen::Index p = 0; p < k; ++p) {
+    by_cell.col(p) << centres.row(order[p]).transpose(), radii[order[p]];
+  }
 }
 
 CloudQuery::CloudQuery() {
@@ -102,19 +106,23 @@ bool CloudQuery::nearest(const CloudConfig& cloud, const coal::CollisionGeometry
     for (long long y = a[1]; y <= b[1]; ++y) {
       const long long column = (x * ny + y) * nz;
       for (int p = cloud.start[column + a[2]]; p < cloud.start[column + b[2] + 1]; ++p) {
+        const double* c = cloud.by_cell.col(p).data();  // x, y, z, radius
+        const double dx = c[0] - t[0], dy = c[1] - t[1], dz = c[2] - t[2];
+        double g2 = 0.0;  // squared gap to the link's box, in its frame (R^T (c - t))
+        for (int k = 0; k < 3; ++k) {
+          const double local = R(0, k) * dx + R(1, k) * dy + R(2, k) * dz;
+          const double out = std::max(std::max(box.lo[k] - local, local - box.hi[k]), 0.0);
+          g2 += out * out;
+        }
+        double lower = -INF;  // a centre inside the box: no bound of its own
+        if (g2 > 0.0) {
+          const double within = first_bar + c[3];  // lower < first_bar: gap < within
+          if (within <= 0.0 || g2 >= within * within) continue;
+          lower = std::sqrt(g2) - c[3];
+        }
         const int s = cloud.order[p];
         if (s == hint) continue;
-        const Vec3 centre_s = cloud.centres.row(s).transpose();
-        const Vec3 local = R.transpose() * (centre_s - t);
-        const Vec3 outside = (box.lo - local).cwiseMax(local - box.hi).cwiseMax(0.0);
-        const double gap2 = outside.dot(outside), radius = cloud.radii[s];
-        double lower = -INF;  // a centre inside the box: no bound of its own
-        if (gap2 > 0.0) {
-          const double within = first_bar + radius;  // lower < first_bar: gap < within
-          if (within <= 0.0 || gap2 >= within * within) continue;
-          lower = std::sqrt(gap2) - radius;
-        }
-        if (n_planes_ > 0) lower = std::max(lower, plane_bound(centre_s) - radius);
+        if (n_planes_ > 0) lower = std::max(lower, plane_bound(Vec3(c[0], c[1], c[2])) - c[3]);
         if (lower < first_bar) hits_.push_back({lower, static_cast<int>(hits_.size()), s});
       }
     }

@@ -44,6 +44,9 @@ struct CloudConfig {
   Eigen::VectorXi start;     // (cells + 1) each cell's first position in order
   double threshold = 0.0;    // d_o [m]
   double largest = 0.0;      // the largest radius [m] (check() sets it)
+  // (4, K): x, y, z [m] and radius [m] of the sphere at each position of `order`, so a
+  // column of cells is read in one contiguous pass (check() sets it).
+  Eigen::Matrix<double, 4, Eigen::Dynamic> by_cell;
 
   int size() const { return static_cast<int>(radii.size()); }
   // Sizes, finite values, the grid's arrays consistent with the centres (each sphere
