@@ -98,9 +98,10 @@ def nearest_sphere(
     outside = np.maximum(np.maximum(lo - local, local - hi), 0.0)
     gaps = np.sqrt(np.einsum("ij,ij->i", outside, outside))
     # a centre inside the box may be deep inside the link: no bound on its signed distance
-    lower = np.where(gaps > 0.0, gaps - grid.radii[candidates], -np.inf)
+    radii = grid.radii[candidates]
+    lower = np.where(gaps > 0.0, gaps - radii, -np.inf)
     if len(planes):  # the hint's plane bounds every sphere too (a sphere inside it as well)
-        lower = np.maximum(lower, planes_bound(planes, grid.centres[candidates]) - grid.radii[candidates])
+        lower = np.maximum(lower, planes_bound(planes, grid.centres[candidates]) - radii)
     keep = lower < bar
     candidates, lower = candidates[keep], lower[keep]
     for i in np.argsort(lower, kind="stable"):
