@@ -60,19 +60,10 @@ def new_cloud(
     if kind is None or name not in names:
         raise InputError("obstacles", f"a cloud's name, one of {names}", name)
     old = current.get(name, kind.clouds[names.index(name)])
-    if not isinstance(points, np.ndarray) or points.dtype != np.float64:
-        points = np.asarray(points, dtype=float) if _numbers(points) else points
-    cloud = old.with_points(points)
+    cloud = old.with_points(points)  # converted and checked by CloudObstacle
     if robot_padding is not None:
         assert cset is not None
         cloud = cloud.without_robot(cset.robot, q, robot_padding)
     current[name] = cloud
     threshold = cloud.threshold if cloud.threshold is not None else kind.threshold
     return cloud, float(threshold)
-
-
-def _numbers(points: Any) -> bool:
-    try:
-        return np.asarray(points).dtype.kind in "fiub"
-    except (TypeError, ValueError):
-        return False

@@ -21,26 +21,13 @@ from clik.constraints import ConstraintSet
 from clik.constraints.cloud_avoidance import CloudAvoidance
 from clik.constraints.collision_scene import CollisionScene
 from clik.trajectory import Line
+from clik.viz.live_demo import box_skin
+from tests.limits_check import assert_within_limits
 
 THRESHOLD = 0.05
 VOXEL = 0.01
 BOX_HALF = np.array([0.06, 0.06, 0.12])
 BALL = 0.05
-
-
-def box_skin(half: np.ndarray, spacing: float) -> np.ndarray:
-    """Points on a box's faces (centred at 0), a grid of ``spacing`` [m] on each face."""
-    faces = []
-    for axis in range(3):
-        u, v = [a for a in range(3) if a != axis]
-        gu = np.arange(-half[u], half[u] + 1e-9, spacing)
-        gv = np.arange(-half[v], half[v] + 1e-9, spacing)
-        U, V = np.meshgrid(gu, gv)
-        for sign in (-1.0, 1.0):
-            face = np.zeros((U.size, 3))
-            face[:, u], face[:, v], face[:, axis] = U.ravel(), V.ravel(), sign * half[axis]
-            faces.append(face)
-    return np.vstack(faces)
 
 
 def ball_skin(radius: float, n: int) -> np.ndarray:
@@ -148,6 +135,8 @@ def test_a_box_sliding_toward_the_arm_tick_by_tick(panda, scene):
         result = ctl.result()
         outcome[engine] = np.array(qs)
         assert verdicts == {"ok"}, result.reason
+        assert_within_limits(result, panda)  # joints in range, no limit crossed
+        assert result.summary()["max_velocity_ratio"] <= 1.0 + 1e-9
         assert worst >= THRESHOLD - VOXEL
         assert any(e["constraint"].startswith("cloud:scan:") for e in result.events)
         hand = task.placement(qs[-1]).translation
@@ -163,6 +152,8 @@ def test_an_empty_cloud_warns_and_adds_no_row(panda, scene):
     cset = ConstraintSet(panda, kinds=[CloudAvoidance([cloud])])
     result = clik.Tracker(task, constraints=cset).run(line)
     assert result.status == "completed" and not result.events
+    assert_within_limits(result, panda)
+    assert result.summary()["max_velocity_ratio"] <= 1.0 + 1e-9
 
 
 def test_a_cloud_that_is_not_a_name_of_the_set_is_refused(panda, scene):

@@ -18,8 +18,8 @@ def panda() -> clik.Robot:
         return clik.Robot.load("panda")
 
 
-def link_points(robot: clik.Robot, q: np.ndarray) -> np.ndarray:
-    """Points on the links: each hull vertex (mesh) or the shape's centre, in the world."""
+def link_points(robot: clik.Robot, q: np.ndarray, per_shape: int = 50) -> np.ndarray:
+    """Points on the links: about ``per_shape`` hull vertices (a mesh) or the shape's centre."""
     data, placed = robot.model.createData(), robot.collision_model.createData()
     pin.updateGeometryPlacements(robot.model, data, robot.collision_model, placed, q)
     found = []
@@ -30,7 +30,7 @@ def link_points(robot: clik.Robot, q: np.ndarray) -> np.ndarray:
             if isinstance(shape, coal.BVHModelBase)
             else np.zeros((1, 3))
         )
-        found.append(local[:: max(1, len(local) // 50)] @ pose.rotation.T + pose.translation)
+        found.append(local[:: max(1, len(local) // per_shape)] @ pose.rotation.T + pose.translation)
     return np.concatenate(found)
 
 

@@ -10,9 +10,7 @@ import json
 import warnings
 from pathlib import Path
 
-import coal
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import clik
@@ -24,6 +22,7 @@ from clik.model.robot import PANDA_FINGERS
 from clik.outputs.result import TrackingResult
 from clik.scenarios.runner import build
 from clik.scenarios.scenario import load_scenario
+from tests.clouds.test_self_filter import link_points
 
 CRATE_CENTRE = (0.307, 0.15, 0.40)
 """Where the crate's frame is [m]: below the middle of the hand's line."""
@@ -208,23 +207,12 @@ def test_a_missing_cloud_file_names_the_key_and_the_file(folder):
     assert "an existing point cloud file" in str(caught.value)
 
 
-def link_points(robot: clik.Robot, q: np.ndarray) -> np.ndarray:
-    """Points on the links at ``q`` [m]: hull vertices (a mesh) or the shape's centre."""
-    data, placed = robot.model.createData(), robot.collision_model.createData()
-    pin.updateGeometryPlacements(robot.model, data, robot.collision_model, placed, q)
-    found = []
-    for go, pose in zip(robot.collision_model.geometryObjects, placed.oMg, strict=True):
-        shape = go.geometry
-        mesh = isinstance(shape, coal.BVHModelBase)
-        local = np.asarray(shape.vertices()) if mesh else np.zeros((1, 3))
-        found.append(local[:: max(1, len(local) // 20)] @ pose.rotation.T + pose.translation)
-    return np.concatenate(found)
-
-
 @pytest.mark.parametrize("self_filter", [True, False])
 def test_the_self_filter_removes_the_arms_points(folder, self_filter):
     robot = clik.Robot.load("panda", lock=PANDA_FINGERS)
-    on_arm = link_points(robot, robot.q_reference) - CRATE_CENTRE  # in the crate's frame
+    on_arm = (
+        link_points(robot, robot.q_reference, per_shape=20) - CRATE_CENTRE
+    )  # in the crate's frame
     crate = box_surface(500)
     np.save(folder / "seen.npy", np.vstack([crate, on_arm]))
     extra = "" if self_filter else "self_filter = false"
